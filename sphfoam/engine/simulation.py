@@ -1,0 +1,106 @@
+"""One simulation: particle state + compiled pipeline + neighbour grid + integrator.
+
+Python here runs once per stage of a step; every per-particle or per-pair loop is in numba.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sphfoam.engine.neighbours import CellList, gather_f8, gather_i8
+from sphfoam.engine.state import FLUID, ParticleState
+from sphfoam.engine.timestep import stable_time_step
+
+
+@dataclass
+class Removal:
+    """Particles that left the domain box during a step."""
+
+    time: float
+    count: int
+    ids: np.ndarray
+    where: np.ndarray  # (count, 2) last positions
+
+
+class Simulation:
+    def __init__(self, state: ParticleState, pipeline, integrator, *, h: float, support: float,
+                 domain_lo, domain_hi, beta: float, force_condition: bool,
+                 adjust_time_step: bool, delta_t: float, max_delta_t: float = math.inf,
+                 cell_size_factor: float = 1.05):
+        self.state = state
+        self.pipeline = pipeline
+        self.prm = pipeline.prm
+        self.integrator = integrator
+        self.h = float(h)
+        self.beta = float(beta)
+        self.force_condition = bool(force_condition)
+        self.adjust_time_step = bool(adjust_time_step)
+        self.delta_t = float(delta_t)
+        self.max_delta_t = float(max_delta_t)
+        self.cells = CellList(domain_lo, domain_hi, support * h * cell_size_factor)
+        self.time = 0.0
+        self.step_index = 0
+        self.last_dt = float(delta_t)
+        self.removals: list[Removal] = []
+        self.on_removal = None
+
+    # --- stages --------------------------------------------------------------------------
+    def neighbour_update(self):
+        """Bin into cells, drop particles that left the domain, sort by cell."""
+        st = self.state
+        cell, outside = self.cells.bin(st.x, st.y)
+        if outside:
+            gone = cell < 0
+            rem = Removal(self.time, int(gone.sum()), st.id[gone].copy(),
+                          np.column_stack([st.x[gone], st.y[gone]]))
+            self.removals.append(rem)
+            if self.on_removal:
+                self.on_removal(rem)
+            st.keep(~gone)
+            cell = cell[~gone]
+        order = self.cells.sort(cell)
+        st.apply(order, gather_f8, gather_i8)
+
+    def _grid_args(self):
+        st, cl = self.state, self.cells
+        return (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, cl.cell_start,
+                cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy, self.prm)
+
+    def eos(self):
+        st = self.state
+        self.pipeline.equation_of_state(st.rho, st.p, st.c, self.prm)
+
+    def rates(self):
+        st = self.state
+        self.pipeline.rates(*self._grid_args(), st.ax, st.ay, st.drho, st.sigma)
+
+    def density_rate(self):
+        self.pipeline.density_rate(*self._grid_args(), self.state.drho)
+
+    def time_step(self) -> float:
+        if not self.adjust_time_step:
+            return self.delta_t
+        st = self.state
+        dt = stable_time_step(self.h, st.c, st.sigma, st.ax, st.ay, st.kind, self.beta,
+                              self.force_condition)
+        return min(dt, self.max_delta_t)
+
+    # --- stepping ------------------------------------------------------------------------
+    def step(self, dt_remaining: float = math.inf) -> float:
+        dt = self.integrator.step(self, dt_remaining)
+        self.time += dt
+        self.step_index += 1
+        return dt
+
+    def pressure(self) -> np.ndarray:
+        """Pressure from the current density (for output)."""
+        self.eos()
+        return self.state.p.copy()
+
+    def kinetic_energy(self) -> float:
+        st = self.state
+        f = st.kind == FLUID
+        return float(0.5 * np.sum(st.m[f] * (st.u[f] ** 2 + st.v[f] ** 2)))

@@ -1,0 +1,90 @@
+"""Particle state as a struct of arrays."""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: particle kinds (the ``type`` field of a time directory)
+FLUID, WALL = 0, 1
+KIND_NAMES = {FLUID: "fluid", WALL: "wall"}
+
+#: persistent arrays (permuted when particles are re-sorted, written to time directories)
+PERSISTENT_F8 = ("x", "y", "u", "v", "rho", "m")
+PERSISTENT_I8 = ("kind", "id")
+#: per-step work arrays (recomputed, never written)
+SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma", "u_half", "v_half")
+
+
+class ParticleState:
+    """Positions, velocities, density, mass, kind and original id of every particle."""
+
+    def __init__(self, x, y, u, v, rho, m, kind, id=None):
+        n = len(x)
+        self.x = np.ascontiguousarray(x, dtype=np.float64)
+        self.y = np.ascontiguousarray(y, dtype=np.float64)
+        self.u = np.ascontiguousarray(u, dtype=np.float64)
+        self.v = np.ascontiguousarray(v, dtype=np.float64)
+        self.rho = np.ascontiguousarray(rho, dtype=np.float64)
+        self.m = np.ascontiguousarray(m, dtype=np.float64)
+        self.kind = np.ascontiguousarray(kind, dtype=np.int64)
+        self.id = np.ascontiguousarray(np.arange(n) if id is None else id, dtype=np.int64)
+        for name in PERSISTENT_F8 + PERSISTENT_I8:
+            if getattr(self, name).shape != (n,):
+                raise ValueError(f"particle field {name!r} has shape "
+                                 f"{getattr(self, name).shape}, expected ({n},)")
+        self._alloc_scratch()
+
+    def _alloc_scratch(self):
+        n = self.n
+        for name in SCRATCH:
+            setattr(self, name, np.zeros(n))
+
+    @property
+    def n(self) -> int:
+        return self.x.shape[0]
+
+    @property
+    def n_fluid(self) -> int:
+        return int(np.count_nonzero(self.kind == FLUID))
+
+    def apply(self, order: np.ndarray, gather_f8, gather_i8):
+        """Reorder every persistent array by ``order`` (numba gathers, no Python loops)."""
+        for name in PERSISTENT_F8:
+            src = getattr(self, name)
+            dst = np.empty_like(src)
+            gather_f8(src, order, dst)
+            setattr(self, name, dst)
+        for name in PERSISTENT_I8:
+            src = getattr(self, name)
+            dst = np.empty_like(src)
+            gather_i8(src, order, dst)
+            setattr(self, name, dst)
+
+    def keep(self, mask: np.ndarray):
+        """Drop the particles where ``mask`` is False."""
+        for name in PERSISTENT_F8 + PERSISTENT_I8:
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
+        self._alloc_scratch()
+
+    # --- time-directory fields -----------------------------------------------------------
+    def to_fields(self, p=None) -> dict[str, np.ndarray]:
+        out = {
+            "positions": np.column_stack([self.x, self.y]),
+            "U": np.column_stack([self.u, self.v]),
+            "rho": self.rho.copy(),
+            "mass": self.m.copy(),
+            "type": self.kind.copy(),
+            "origId": self.id.copy(),
+        }
+        if p is not None:
+            out["p"] = np.asarray(p, dtype=np.float64).copy()
+        return out
+
+    @classmethod
+    def from_fields(cls, f: dict[str, np.ndarray]) -> "ParticleState":
+        missing = [k for k in ("positions", "U", "rho", "mass", "type") if k not in f]
+        if missing:
+            raise KeyError(f"missing particle field(s): {', '.join(missing)}")
+        pos, vel = f["positions"], f["U"]
+        return cls(pos[:, 0], pos[:, 1], vel[:, 0], vel[:, 1], f["rho"], f["mass"], f["type"],
+                   f.get("origId"))

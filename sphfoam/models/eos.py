@@ -1,0 +1,78 @@
+"""Equations of state: pressure (and sound speed) from density."""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from numba import njit
+from pydantic import Field
+
+from sphfoam.models.base import CaseContext, PipelineModel
+from sphfoam.registry import Coeffs, register
+
+_JIT = dict(cache=True, fastmath=True, inline="always")
+
+
+@njit(**_JIT)
+def tait_pressure(rho, rho0, B, gamma):
+    """T(3.27): p = B ((rho / rho0)^gamma - 1)."""
+    return B * ((rho / rho0) ** gamma - 1.0)
+
+
+@njit(**_JIT)
+def tait_sound_speed(rho, rho0, c0, gamma):
+    """c = sqrt(dp/drho) = c0 (rho / rho0)^((gamma - 1) / 2), from T(3.27)-(3.29)."""
+    return c0 * (rho / rho0) ** (0.5 * (gamma - 1.0))
+
+
+@register
+class Tait(PipelineModel):
+    """Weakly compressible Tait equation, B from the allowed density variation."""
+
+    family = "equationOfState"
+    name = "tait"
+    doc = ("Tait/Batchelor p = B((rho/rho0)^gamma - 1), T(3.27); B = rho0 vmax^2 / "
+           "(gamma |drho/rho|) from T(3.29)-(3.31)")
+    prefix = "eos_"
+
+    class Coeffs(Coeffs):
+        gamma: float = Field(7.0, gt=1.0, description="stiffness exponent")
+        vmax: float | Literal["auto"] = Field(
+            "auto", description="estimate of the largest flow speed (m/s); auto = sqrt(2 g H)")
+        densityVariation: float = Field(
+            0.01, gt=0.0, lt=0.2, description="allowed |drho|/rho ~ vmax^2/c^2, T(3.30); 0.01 "
+            "gives c = 10 vmax and the 100 of T(3.31)")
+        speedOfSound: float | None = Field(
+            None, gt=0.0, description="give c0 (m/s) directly instead of vmax/densityVariation")
+
+    def vmax(self, ctx: CaseContext) -> float:
+        if self.coeffs.vmax == "auto":
+            gmag = math.hypot(*ctx.g)
+            return math.sqrt(2.0 * gmag * max(ctx.fluid_height, 0.0)) or 1.0
+        return float(self.coeffs.vmax)
+
+    def c0(self, ctx: CaseContext) -> float:
+        if self.coeffs.speedOfSound is not None:
+            return float(self.coeffs.speedOfSound)
+        return self.vmax(ctx) / math.sqrt(self.coeffs.densityVariation)
+
+    def B(self, ctx: CaseContext) -> float:
+        """T(3.29): c0^2 = gamma B / rho0."""
+        return self.c0(ctx) ** 2 * ctx.rho0 / self.coeffs.gamma
+
+    def imports(self):
+        return ["from sphfoam.models.eos import tait_pressure as eos_pressure, "
+                "tait_sound_speed as eos_sound_speed"]
+
+    def params(self, ctx):
+        return {"eos_rho0": ctx.rho0, "eos_B": self.B(ctx), "eos_c0": self.c0(ctx),
+                "eos_gamma": self.coeffs.gamma}
+
+    # generated per-particle code: p and c from rho
+    eos_code = ("p[a] = eos_pressure(rho[a], eos_rho0, eos_B, eos_gamma)\n"
+                "c[a] = eos_sound_speed(rho[a], eos_rho0, eos_c0, eos_gamma)")
+
+    def density(self, p, ctx: CaseContext):
+        """Inverse of T(3.27), for hydrostatic initial states."""
+        return ctx.rho0 * (1.0 + p / self.B(ctx)) ** (1.0 / self.coeffs.gamma)

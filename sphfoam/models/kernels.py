@@ -1,0 +1,155 @@
+"""Smoothing kernels in two dimensions, W(r, h) = alpha_d / h^2 * f(q), q = |r| / h.
+
+Each kernel provides ``f(q)`` and ``df/dq / q`` as jitted functions (the second is finite at
+q = 0 for all of them, so grad W = alpha_d / h^4 * (df/dq / q) * r_ab needs no division by r).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+from pydantic import Field
+
+from sphfoam.models.base import CaseContext, PipelineModel
+from sphfoam.registry import Coeffs, register
+
+_JIT = dict(cache=True, fastmath=True, inline="always")
+
+
+# --- cubic spline, Monaghan & Lattanzio (1985), T(3.5), alpha_2 = 15 / (7 pi) -------------
+@njit(**_JIT)
+def cubic_spline_f(q):
+    t2 = max(2.0 - q, 0.0)
+    t1 = max(1.0 - q, 0.0)
+    return (t2 * t2 * t2 - 4.0 * t1 * t1 * t1) / 6.0
+
+
+@njit(**_JIT)
+def cubic_spline_dfdq_q(q):
+    if q < 1.0:
+        return -2.0 + 1.5 * q
+    t2 = max(2.0 - q, 0.0)
+    return -0.5 * t2 * t2 / q
+
+
+# --- quintic spline, Morris et al. (1997), T(3.6), alpha_2 = 7 / (478 pi) -----------------
+@njit(**_JIT)
+def quintic_f(q):
+    t3 = max(3.0 - q, 0.0)
+    t2 = max(2.0 - q, 0.0)
+    t1 = max(1.0 - q, 0.0)
+    return t3**5 - 6.0 * t2**5 + 15.0 * t1**5
+
+
+@njit(**_JIT)
+def quintic_dfdq_q(q):
+    if q < 1.0:
+        # -5(3-q)^4 + 30(2-q)^4 - 75(1-q)^4 = q (-120 + 120 q^2 - 50 q^3) ... expanded exactly:
+        return -120.0 + q * q * (120.0 - 50.0 * q)
+    t3 = max(3.0 - q, 0.0)
+    t2 = max(2.0 - q, 0.0)
+    return (-5.0 * t3**4 + 30.0 * t2**4) / q
+
+
+# --- quartic spline, Violeau & Issa (2007), T(3.7), alpha_2 = 96 / (1199 pi) --------------
+@njit(**_JIT)
+def quartic_f(q):
+    t5 = max(2.5 - q, 0.0)
+    t3 = max(1.5 - q, 0.0)
+    t1 = max(0.5 - q, 0.0)
+    return t5**4 - 5.0 * t3**4 + 10.0 * t1**4
+
+
+@njit(**_JIT)
+def quartic_dfdq_q(q):
+    if q < 0.5:
+        # -4(2.5-q)^3 + 20(1.5-q)^3 - 40(0.5-q)^3 = q (-30 + 24 q^2) exactly
+        return -30.0 + 24.0 * q * q
+    t5 = max(2.5 - q, 0.0)
+    t3 = max(1.5 - q, 0.0)
+    return (-4.0 * t5**3 + 20.0 * t3**3) / q
+
+
+# --- Wendland C2 (1995) in 2-D, alpha_2 = 7 / (4 pi), support 2h --------------------------
+@njit(**_JIT)
+def wendland_c2_f(q):
+    t = max(1.0 - 0.5 * q, 0.0)
+    return t**4 * (2.0 * q + 1.0)
+
+
+@njit(**_JIT)
+def wendland_c2_dfdq_q(q):
+    t = max(1.0 - 0.5 * q, 0.0)
+    return -5.0 * t**3
+
+
+class Kernel(PipelineModel):
+    """A compactly supported kernel; subclasses name their jitted ``f`` and ``dfdq_q``."""
+
+    family = "kernel"
+    prefix = "kern_"
+    support: float      # kappa: W = 0 for q >= kappa
+    alpha_2d: float     # normalisation in 2-D
+    f_name: str
+    dfdq_q_name: str
+
+    class Coeffs(Coeffs):
+        hdx: float = Field(1.3, gt=0.5, le=3.0, description="smoothing length h = hdx * dx")
+
+    def f(self, q):
+        return globals()[self.f_name](q)
+
+    def dfdq_q(self, q):
+        return globals()[self.dfdq_q_name](q)
+
+    def imports(self):
+        return [f"from sphfoam.models.kernels import {self.f_name} as kernel_f, "
+                f"{self.dfdq_q_name} as kernel_dfdq_q"]
+
+    def params(self, ctx: CaseContext):
+        h = ctx.h
+        return {"kern_w": self.alpha_2d / h**2, "kern_gw": self.alpha_2d / h**4}
+
+    def W(self, r, h):
+        """Kernel value for a numpy/scalar distance (tests and post-processing)."""
+        import numpy as np
+
+        q = np.asarray(r, dtype=float) / h
+        return self.alpha_2d / h**2 * np.vectorize(globals()[self.f_name])(q)
+
+
+@register
+class CubicSpline(Kernel):
+    name = "cubicSpline"
+    doc = "cubic B-spline, Monaghan & Lattanzio (1985), T(3.5); support 2h"
+    support = 2.0
+    alpha_2d = 15.0 / (7.0 * math.pi)
+    f_name, dfdq_q_name = "cubic_spline_f", "cubic_spline_dfdq_q"
+
+
+@register
+class Quartic(Kernel):
+    name = "quartic"
+    doc = "quartic spline, Violeau & Issa (2007), T(3.7); support 2.5h"
+    support = 2.5
+    alpha_2d = 96.0 / (1199.0 * math.pi)
+    f_name, dfdq_q_name = "quartic_f", "quartic_dfdq_q"
+
+
+@register
+class Quintic(Kernel):
+    name = "quintic"
+    doc = "quintic spline, Morris et al. (1997), T(3.6); support 3h"
+    support = 3.0
+    alpha_2d = 7.0 / (478.0 * math.pi)
+    f_name, dfdq_q_name = "quintic_f", "quintic_dfdq_q"
+
+
+@register
+class WendlandC2(Kernel):
+    name = "wendlandC2"
+    doc = "Wendland C2 (1995), the default of modern SPH codes; support 2h"
+    support = 2.0
+    alpha_2d = 7.0 / (4.0 * math.pi)
+    f_name, dfdq_q_name = "wendland_c2_f", "wendland_c2_dfdq_q"

@@ -1,0 +1,122 @@
+"""Run-time selectable models, the OpenFOAM way: ``family { type name; coeffs... }``.
+
+Every concrete model lives in ``sphfoam/models/<family module>.py`` and registers itself with
+:func:`register`.  The engine only ever asks the registry for a family and a name; it never
+imports a concrete model.  Each entry carries
+
+* ``name``   the word a user writes after ``type``,
+* ``doc``    a one-line description citing the equation it implements (T = thesis, P = paper),
+* ``Coeffs`` a pydantic model validating the coefficients written beside ``type``.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from pydantic import BaseModel, ConfigDict
+
+#: Families a case can select from, with what each is for (``sphfoam models`` prints these).
+FAMILIES: dict[str, str] = {
+    "kernel": "smoothing kernel W(q) and its gradient",
+    "equationOfState": "pressure from density",
+    "continuity": "SPH form of the continuity equation (rate of change of density)",
+    "momentum": "SPH form of the pressure-gradient term of the momentum equation",
+    "viscosity": "viscous term of the momentum equation",
+    "turbulence": "sub-particle-scale turbulence closure",
+    "boundary": "solid-wall representation",
+    "densityFilter": "periodic smoothing/re-initialisation of the density field",
+    "velocityCorrection": "correction of the advection velocity (e.g. XSPH)",
+    "kernelCorrection": "corrected kernels and gradients (e.g. C-SPH)",
+    "integrator": "time-marching scheme",
+    "motion": "prescribed motion of boundary particles",
+    "functionObject": "in-run and post-processing sampling",
+}
+
+
+class Coeffs(BaseModel):
+    """Base of every model's coefficient schema: unknown keys are errors."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Model:
+    """Base class of a registered model. Subclasses set the class attributes below."""
+
+    family: ClassVar[str]
+    name: ClassVar[str]
+    doc: ClassVar[str]
+    Coeffs: ClassVar[type[BaseModel]] = Coeffs
+
+    def __init__(self, coeffs: BaseModel | None = None):
+        self.coeffs = coeffs if coeffs is not None else self.Coeffs()
+
+    def __repr__(self) -> str:
+        return f"{self.family}:{self.name}({self.coeffs!r})"
+
+
+_REGISTRY: dict[str, dict[str, type[Model]]] = {f: {} for f in FAMILIES}
+
+
+def register(cls: type[Model]) -> type[Model]:
+    """Class decorator adding a model to its family."""
+    if cls.family not in _REGISTRY:
+        raise KeyError(f"unknown model family {cls.family!r}")
+    if cls.name in _REGISTRY[cls.family]:
+        raise KeyError(f"{cls.family} {cls.name!r} registered twice")
+    if not getattr(cls, "doc", ""):
+        raise ValueError(f"{cls.family} {cls.name!r} needs a one-line doc")
+    _REGISTRY[cls.family][cls.name] = cls
+    return cls
+
+
+@dataclass
+class UnknownModel(LookupError):
+    family: str
+    name: str
+    choices: list[str]
+
+    @property
+    def suggestion(self) -> str | None:
+        close = difflib.get_close_matches(self.name, self.choices, n=1, cutoff=0.5)
+        return close[0] if close else None
+
+    def __str__(self) -> str:
+        msg = f"{self.name!r} is not a registered {self.family}"
+        if self.suggestion:
+            msg += f"; did you mean {self.suggestion!r}?"
+        return msg + f" registered: {', '.join(self.choices) or '(none)'}"
+
+
+def _load_models() -> None:
+    import sphfoam.models  # noqa: F401  (registers every built-in model)
+
+
+def names(family: str) -> list[str]:
+    _load_models()
+    return list(_REGISTRY[family])
+
+
+def get(family: str, name: str) -> type[Model]:
+    _load_models()
+    try:
+        return _REGISTRY[family][name]
+    except KeyError:
+        raise UnknownModel(family, name, list(_REGISTRY[family])) from None
+
+
+def families() -> dict[str, dict[str, type[Model]]]:
+    _load_models()
+    return {f: dict(models) for f, models in _REGISTRY.items()}
+
+
+def build(family: str, spec: dict[str, Any]) -> Model:
+    """Instantiate ``spec['type']`` of ``family`` with the remaining keys as coefficients.
+
+    Raises :class:`UnknownModel` or pydantic's ``ValidationError`` (the case layer turns both
+    into one-screen messages naming the file and key path).
+    """
+    spec = dict(spec)
+    cls = get(family, str(spec.pop("type")))
+    return cls(cls.Coeffs.model_validate(spec))
