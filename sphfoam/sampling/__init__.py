@@ -1,1 +1,1 @@
-
+"""Function objects (registered in the ``functionObject`` family)."""

@@ -1,0 +1,728 @@
+#!/usr/bin/env python
+"""Engine benchmark: compile time and run throughput of the generated SPH pipeline.
+
+Case: 2-D dam break, a water column of width = height H in a tank 4 H long and 2 H high,
+walled by 3 layers of stationary-ghost particles (as in the engine's smoke test), h = 1.3 dx,
+Wendland C2, Tait, differenceForm continuity, symmetric momentum, artificial viscosity
+(alpha 0.1), monaghan2007 integrator, adjustTimeStep with beta 0.2.
+
+For every size N (total particles, dx chosen to hit N) and thread count it measures
+
+* throughput over >= ``--seconds`` of stepping after ``--warmup`` steps:
+  particle-steps/s, particle-force-evaluations/s (and per thread), pair interactions/s;
+* where the time of a step goes (neighbour_update, eos, rates, time_step, density_rate,
+  integrator updates, Python remainder), from an instrumented pass;
+* neighbour statistics counted outside the timed region (pairs within the support, pairs
+  the 3 x 3-cell loop has to test, wall-wall pairs);
+
+and, once, the compile time of the pipeline: cold (fresh SPHFOAM_CACHE_DIR and
+NUMBA_CACHE_DIR, in a subprocess) and cached (a second subprocess on the same directories).
+
+Results: ``benchmarks/results/engine-<date>[-tag].json`` and
+``benchmarks/results/engine-latest[-tag].md``. ``--quick`` = 10k particles, 1 s, tag "quick".
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+
+# --- case -------------------------------------------------------------------------------
+H = 1.0             # water column height = width (m)
+TANK_LENGTH = 4.0   # tank length / H
+TANK_HEIGHT = 2.0   # wall height / H
+LAYERS = 3          # rows of wall particles
+HDX = 1.3
+RHO0 = 1000.0
+G = 9.81
+BETA = 0.2
+MODELS = [
+    ("kernel", {"type": "wendlandC2"}),
+    ("equationOfState", {"type": "tait"}),
+    ("continuity", {"type": "differenceForm"}),
+    ("momentum", {"type": "symmetric"}),
+    ("viscosity", {"type": "artificial", "alpha": 0.1}),
+    ("boundary", {"type": "stationaryGhosts"}),
+]
+INTEGRATOR = {"type": "monaghan2007"}
+
+
+def count_for(n: int) -> int:
+    """Total particles for a column of n x n fluid particles."""
+    nl = int(round(TANK_LENGTH * n))
+    nh = int(round(TANK_HEIGHT * n))
+    walls = (nl + 2 * LAYERS) * (nh + LAYERS) - nl * nh
+    return n * n + walls
+
+
+def n_for(total: int) -> int:
+    """Fluid particles per column side whose total particle count is closest to ``total``."""
+    best = 2
+    for n in range(2, 5000):
+        if abs(count_for(n) - total) < abs(count_for(best) - total):
+            best = n
+        if count_for(n) > total:
+            break
+    return best
+
+
+def dam_break(total: int):
+    """Positions, kinds and spacing of the dam break with about ``total`` particles."""
+    import numpy as np
+
+    n = n_for(total)
+    dx = H / n
+    nl = int(round(TANK_LENGTH * n))
+    nh = int(round(TANK_HEIGHT * n))
+    i = np.arange(n)
+    X, Y = np.meshgrid((i + 0.5) * dx, (i + 0.5) * dx)
+    xf, yf = X.ravel(), Y.ravel()
+    iw = np.arange(-LAYERS, nl + LAYERS)
+    jw = np.arange(-LAYERS, nh)
+    IW, JW = np.meshgrid(iw, jw)
+    IW, JW = IW.ravel(), JW.ravel()
+    keep = ~((IW >= 0) & (IW < nl) & (JW >= 0))
+    xw, yw = (IW[keep] + 0.5) * dx, (JW[keep] + 0.5) * dx
+    x = np.r_[xf, xw]
+    y = np.r_[yf, yw]
+    kind = np.r_[np.zeros(len(xf), np.int64), np.ones(len(xw), np.int64)]
+    return x, y, kind, dx, n
+
+
+def build_selection():
+    from sphfoam import registry
+    from sphfoam.engine.codegen import Selection
+
+    return Selection(*(registry.build(f, s) for f, s in MODELS), adjust_time_step=True)
+
+
+def make_context(dx):
+    from sphfoam.models.base import CaseContext
+
+    return CaseContext(dx=dx, h=HDX * dx, rho0=RHO0, nu=1e-6, g=(0.0, -G), fluid_height=H)
+
+
+def core_params(sel, dx):
+    h = HDX * dx
+    kappa = sel.kernel.support
+    return dict(h=h, inv_h=1.0 / h, support2=(kappa * h) ** 2, eta2=0.01 * h * h,
+                gx=0.0, gy=-G)
+
+
+def build(dx):
+    from sphfoam.engine.codegen import build_pipeline
+
+    sel = build_selection()
+    ctx = make_context(dx)
+    return sel, ctx, build_pipeline(sel, ctx, core_params(sel, dx))
+
+
+def make_sim(total: int):
+    """A fresh dam-break Simulation with about ``total`` particles (the pipeline module is
+    generated and compiled once per process; only its coefficient vector depends on dx)."""
+    import numpy as np
+    from sphfoam import registry
+    from sphfoam.engine.simulation import Simulation
+    from sphfoam.engine.state import ParticleState
+
+    x, y, kind, dx, n = dam_break(total)
+    sel, _, pipe = build(dx)
+    ctx = make_context(dx)
+    eos = sel.equationOfState
+    p = RHO0 * G * np.maximum(H - y, 0.0)
+    rho = eos.density(p, ctx)
+    st = ParticleState(x, y, 0 * x, 0 * x, rho, rho * dx * dx, kind)
+    h = HDX * dx
+    pad = 2 * sel.kernel.support * h
+    lo = (-LAYERS * dx - pad, -LAYERS * dx - pad)
+    hi = (TANK_LENGTH * H + LAYERS * dx + pad, 1.25 * TANK_HEIGHT * H + pad)
+    integ = registry.build("integrator", dict(INTEGRATOR))
+    sim = Simulation(st, pipe, integ, h=h, support=sel.kernel.support, domain_lo=lo,
+                     domain_hi=hi, beta=BETA, force_condition=True, adjust_time_step=True,
+                     delta_t=1e-4)
+    return sim, dict(dx=dx, h=h, n_side=n, n=int(st.n), n_fluid=int(st.n_fluid),
+                     n_wall=int(st.n - st.n_fluid), cells=(sim.cells.ncx, sim.cells.ncy))
+
+
+# --- neighbour statistics (outside every timed region) -----------------------------------
+_count_pairs = None
+
+
+def _pair_counter():
+    global _count_pairs
+    if _count_pairs is None:
+        from numba import njit, prange
+
+        @njit(parallel=True, cache=False)
+        def count_pairs(x, y, kind, cell_start, x0, y0, inv_cell, ncx, ncy, support2,
+                        nb, cand, nb_wall):
+            """Per particle: neighbours within the support (b != a, r2 < support2, exactly
+            the pairs the gather loops evaluate), candidates tested in the 3 x 3 cells, and
+            neighbours that are wall particles."""
+            for a in prange(x.shape[0]):
+                xa = x[a]
+                ya = y[a]
+                ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)
+                iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)
+                k = 0
+                t = 0
+                w = 0
+                for cy in range(max(iy - 1, 0), min(iy + 2, ncy)):
+                    for cx in range(max(ix - 1, 0), min(ix + 2, ncx)):
+                        cc = cy * ncx + cx
+                        for b in range(cell_start[cc], cell_start[cc + 1]):
+                            t += 1
+                            dxx = xa - x[b]
+                            dyy = ya - y[b]
+                            if dxx * dxx + dyy * dyy < support2 and b != a:
+                                k += 1
+                                if kind[b] != 0:
+                                    w += 1
+                nb[a] = k
+                cand[a] = t
+                nb_wall[a] = w
+
+        _count_pairs = count_pairs
+    return _count_pairs
+
+
+def neighbour_stats(sim, check_kdtree=False):
+    import numpy as np
+
+    sim.neighbour_update()      # sort for the current positions (what the next step does)
+    st, cl = sim.state, sim.cells
+    n = st.n
+    nb = np.zeros(n, np.int64)
+    cand = np.zeros(n, np.int64)
+    nbw = np.zeros(n, np.int64)
+    support2 = float(sim.prm[2])
+    _pair_counter()(st.x, st.y, st.kind, cl.cell_start, cl.x0, cl.y0, 1.0 / cl.cell_size,
+                    cl.ncx, cl.ncy, support2, nb, cand, nbw)
+    fluid = st.kind == 0
+    out = dict(
+        pairs=int(nb.sum()),                          # ordered pairs a != b within support
+        pairs_fluid_a=int(nb[fluid].sum()),
+        pairs_wall_a=int(nb[~fluid].sum()),
+        pairs_wall_wall=int(nbw[~fluid].sum()),       # contribute exactly 0 (u_ab = 0)
+        candidates=int(cand.sum()),                   # distance tests in the 3 x 3 cells
+        mean_neighbours=float(nb.mean()),
+        mean_neighbours_fluid=float(nb[fluid].mean()) if fluid.any() else 0.0,
+        max_neighbours=int(nb.max()),
+    )
+    if check_kdtree:
+        from scipy.spatial import cKDTree
+
+        pts = np.column_stack([st.x, st.y])
+        tree = cKDTree(pts)
+        r = math.sqrt(support2) * (1.0 - 1e-12)
+        out["pairs_kdtree"] = int(tree.count_neighbors(tree, r)) - n
+    return out
+
+
+# --- machine contention probes -----------------------------------------------------------
+def cpu_busy(interval=0.5):
+    """Fraction of all CPUs busy (any process) over ``interval`` s, from /proc/stat."""
+    def read():
+        with open("/proc/stat") as f:
+            v = [int(t) for t in f.readline().split()[1:]]
+        idle = v[3] + (v[4] if len(v) > 4 else 0)
+        return sum(v), idle
+    try:
+        t0, i0 = read()
+        time.sleep(interval)
+        t1, i1 = read()
+    except OSError:
+        return float("nan")
+    return 1.0 - (i1 - i0) / max(t1 - t0, 1)
+
+
+def wait_idle(max_wait, threshold=0.15):
+    """Wait (up to ``max_wait`` s) until the machine is idle; return the busy fraction."""
+    t_end = time.perf_counter() + max_wait
+    busy = cpu_busy()
+    while busy > threshold and time.perf_counter() < t_end:
+        busy = cpu_busy(1.0)
+    return busy
+
+
+_probe_fn = None
+
+
+def parallel_launch_us(threads, calls=200):
+    """Median wall time of an almost empty numba prange region at ``threads`` threads: the
+    fixed cost every parallel stage pays (large when another process holds a core)."""
+    global _probe_fn
+    import numba
+    import numpy as np
+
+    if _probe_fn is None:
+        @numba.njit(parallel=True, cache=False)
+        def probe(a):
+            for i in numba.prange(a.shape[0]):
+                a[i] += 1.0
+        _probe_fn = probe
+    a = np.zeros(1024)
+    numba.set_num_threads(threads)
+    _probe_fn(a)
+    ts = []
+    for _ in range(calls):
+        t0 = time.perf_counter()
+        _probe_fn(a)
+        ts.append(time.perf_counter() - t0)
+    return 1e6 * float(np.median(ts))
+
+
+# --- timing ------------------------------------------------------------------------------
+def timed_steps(sim, seconds, min_steps=5):
+    times = []
+    t_start = time.perf_counter()
+    while True:
+        t0 = time.perf_counter()
+        sim.step()
+        t1 = time.perf_counter()
+        times.append(t1 - t0)
+        if t1 - t_start >= seconds and len(times) >= min_steps:
+            break
+    return times
+
+
+class _Timer:
+    def __init__(self):
+        self.total = {}
+        self.calls = {}
+
+    def wrap(self, name, fn):
+        def wrapped(*a, **k):
+            t0 = time.perf_counter()
+            r = fn(*a, **k)
+            dt = time.perf_counter() - t0
+            self.total[name] = self.total.get(name, 0.0) + dt
+            self.calls[name] = self.calls.get(name, 0) + 1
+            return r
+        return wrapped
+
+
+STAGES = ["neighbour_update", "  bin", "  sort", "  permute", "eos", "rates", "time_step",
+          "density_rate", "integrator_update", "other (python)"]
+
+
+def stage_breakdown(sim, seconds, min_steps=5):
+    """Time each stage inside real steps by wrapping the stage methods of ``sim`` and the
+    integrator's numba kernels (module globals, restored afterwards; nothing is edited)."""
+    from sphfoam.models import integrators as integ_mod
+
+    tm = _Timer()
+    st = sim.state
+    patched_sim = ["neighbour_update", "eos", "rates", "density_rate", "time_step"]
+    for name in patched_sim:
+        setattr(sim, name, tm.wrap(name, getattr(sim, name)))
+    sim.cells.bin = tm.wrap("  bin", sim.cells.bin)
+    sim.cells.sort = tm.wrap("  sort", sim.cells.sort)
+    st.apply = tm.wrap("  permute", st.apply)
+    kern = [k for k in ("_monaghan_half", "_monaghan_full", "_density_update")
+            if hasattr(integ_mod, k)]
+    saved = {k: getattr(integ_mod, k) for k in kern}
+    for k in kern:
+        setattr(integ_mod, k, tm.wrap("integrator_update", saved[k]))
+    try:
+        times = timed_steps(sim, seconds, min_steps)
+    finally:
+        for k, f in saved.items():
+            setattr(integ_mod, k, f)
+        for name in patched_sim:
+            delattr(sim, name)
+        del sim.cells.bin, sim.cells.sort, st.apply
+    nsteps = len(times)
+    total = sum(times)
+    top = ["neighbour_update", "eos", "rates", "time_step", "density_rate", "integrator_update"]
+    out = {}
+    for s in STAGES:
+        if s == "other (python)":
+            t = total - sum(tm.total.get(k, 0.0) for k in top)
+            calls = nsteps
+        else:
+            t = tm.total.get(s, 0.0)
+            calls = tm.calls.get(s, 0)
+        out[s] = dict(ms_per_step=1e3 * t / nsteps, calls_per_step=calls / nsteps,
+                      ms_per_call=1e3 * t / calls if calls else 0.0,
+                      share=t / total if total else 0.0)
+    return dict(steps=nsteps, ms_per_step=1e3 * total / nsteps, stages=out)
+
+
+def bench_config(total, threads, args):
+    import numba
+    import numpy as np
+
+    busy_before = wait_idle(args.wait_idle) if args.wait_idle > 0 else cpu_busy()
+    launch_us = parallel_launch_us(threads)
+    numba.set_num_threads(threads)
+    sim, info = make_sim(total)
+    fe = sim.integrator.force_evaluations_per_step
+    for _ in range(args.warmup):
+        sim.step()
+    ns0 = neighbour_stats(sim, check_kdtree=(threads == args.threads[0]))
+    c0, w0 = time.process_time(), time.perf_counter()
+    times = timed_steps(sim, args.seconds)
+    cpu_util = (time.process_time() - c0) / ((time.perf_counter() - w0) * threads)
+    ns1 = neighbour_stats(sim)
+    steps = len(times)
+    el = float(sum(times))
+    n = info["n"]
+    pairs = 0.5 * (ns0["pairs"] + ns1["pairs"])
+    stages = stage_breakdown(sim, args.stage_seconds)
+    ms_rates = stages["stages"]["rates"]["ms_per_call"]
+    ms_drate = stages["stages"]["density_rate"]["ms_per_call"]
+    res = dict(
+        **info, threads=threads, steps=steps, seconds=el,
+        sim_time=sim.time, last_dt=sim.last_dt,
+        ms_per_step=1e3 * el / steps, ms_per_step_median=1e3 * float(np.median(times)),
+        particle_steps_per_s=n * steps / el,
+        force_evaluations_per_step=fe,
+        particle_force_evals_per_s=n * steps * fe / el,
+        particle_force_evals_per_s_per_thread=n * steps * fe / el / threads,
+        pair_interactions_per_s=pairs * fe * steps / el,
+        # every pass over the pairs, including density_rate (the 3rd pair loop of a step)
+        pair_loop_visits_per_s=pairs * (fe + 1) * steps / el,
+        ns_per_pair_rates=1e6 * ms_rates / pairs * threads if pairs else 0.0,
+        ns_per_pair_density_rate=1e6 * ms_drate / pairs * threads if pairs else 0.0,
+        neighbours_start=ns0, neighbours_end=ns1,
+        mean_neighbours=0.5 * (ns0["mean_neighbours"] + ns1["mean_neighbours"]),
+        stage_breakdown=stages,
+        removed=int(sum(r.count for r in sim.removals)),
+        machine_busy_before=busy_before,       # all CPUs, any process, before the config
+        parallel_launch_us=launch_us,          # empty prange region at this thread count
+        cpu_utilisation=cpu_util,              # process CPU time / (wall x threads), timed
+        loadavg_after=os.getloadavg()[0],
+    )
+    return res
+
+
+# --- compile time (subprocesses) --------------------------------------------------------
+def compile_child(total):
+    """Run in a fresh interpreter: import + build + first steps, print one JSON line."""
+    t0 = time.perf_counter()
+    import numba  # noqa: F401
+    import numpy  # noqa: F401
+    import sphfoam.engine.codegen  # noqa: F401
+    import sphfoam.engine.simulation  # noqa: F401
+    import sphfoam.models  # noqa: F401
+    t1 = time.perf_counter()
+    x, y, kind, dx, n = dam_break(total)
+    sel, ctx, pipe = build(dx)
+    t2 = time.perf_counter()
+    sim, info = make_sim(total)
+    t3 = time.perf_counter()
+    sim.step()
+    t4 = time.perf_counter()
+    sim.step()
+    t5 = time.perf_counter()
+    print("JSON:" + json.dumps(dict(
+        import_s=t1 - t0, build_s=t2 - t1, compile_seconds=pipe.compile_seconds,
+        cache_hit=bool(pipe.cache_hit), import_build_s=t2 - t0,
+        first_step_s=t4 - t3, second_step_s=t5 - t4,
+        engine_jit_s=(t4 - t3) - (t5 - t4), n=info["n"],
+        source=str(pipe.source_path))))
+
+
+def measure_compile(cache_dir: Path, small_n: int):
+    env = dict(os.environ)
+    env["SPHFOAM_CACHE_DIR"] = str(cache_dir / "sphfoam")
+    env["NUMBA_CACHE_DIR"] = str(cache_dir / "numba")
+    out = {}
+    for label in ("cold", "cached"):
+        t0 = time.perf_counter()
+        cp = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--_compile-child",
+                             str(small_n)], env=env, capture_output=True, text=True,
+                            cwd=str(REPO))
+        wall = time.perf_counter() - t0
+        if cp.returncode != 0:
+            raise RuntimeError(f"compile child ({label}) failed:\n{cp.stdout}\n{cp.stderr}")
+        line = [ln for ln in cp.stdout.splitlines() if ln.startswith("JSON:")][-1]
+        d = json.loads(line[5:])
+        d["process_wall_s"] = wall
+        out[label] = d
+    return out
+
+
+# --- reporting --------------------------------------------------------------------------
+def _si(v):
+    for unit, f in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
+        if abs(v) >= f:
+            return f"{v / f:.2f} {unit}"
+    return f"{v:.2f}"
+
+
+THROUGHPUT_COLS = [
+    ("N", lambda r: f"{r['n']:,}"),
+    ("fluid", lambda r: f"{r['n_fluid']:,}"),
+    ("dx (mm)", lambda r: f"{1e3 * r['dx']:.2f}"),
+    ("thr", lambda r: str(r["threads"])),
+    ("steps", lambda r: str(r["steps"])),
+    ("ms/step", lambda r: f"{r['ms_per_step']:.2f}"),
+    ("particle-steps/s", lambda r: _si(r["particle_steps_per_s"])),
+    ("p-force-evals/s", lambda r: _si(r["particle_force_evals_per_s"])),
+    ("per thread", lambda r: _si(r["particle_force_evals_per_s_per_thread"])),
+    ("pair interactions/s", lambda r: _si(r["pair_interactions_per_s"])),
+    ("mean nbrs", lambda r: f"{r['mean_neighbours']:.1f}"),
+    ("speedup", lambda r: f"{r.get('speedup', 1.0):.2f}"),
+    ("launch (us)", lambda r: f"{r['parallel_launch_us']:.0f}"),
+    ("cpu util", lambda r: f"{100 * r['cpu_utilisation']:.0f}%"),
+    ("busy before", lambda r: f"{100 * r['machine_busy_before']:.0f}%"),
+]
+
+COMPILE_COLS = [
+    ("build", lambda k, d: k),
+    ("compile_seconds", lambda k, d: f"{d['compile_seconds']:.2f}"),
+    ("cache hit", lambda k, d: str(d["cache_hit"])),
+    ("import (s)", lambda k, d: f"{d['import_s']:.2f}"),
+    ("build (s)", lambda k, d: f"{d['build_s']:.2f}"),
+    ("import+build (s)", lambda k, d: f"{d['import_build_s']:.2f}"),
+    ("1st step JIT (s)", lambda k, d: f"{d['engine_jit_s']:.2f}"),
+    ("process wall (s)", lambda k, d: f"{d['process_wall_s']:.2f}"),
+]
+
+
+def stage_rows(r):
+    rows = []
+    for s, d in r["stage_breakdown"]["stages"].items():
+        rows.append([s, f"{d['calls_per_step']:.0f}", f"{d['ms_per_call']:.3f}",
+                     f"{d['ms_per_step']:.3f}", f"{100 * d['share']:.1f}%"])
+    return rows
+
+
+def markdown_table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    out += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def print_tables(results):
+    try:
+        from rich.console import Console
+        from rich.table import Table
+
+        con = Console(width=200)
+
+        def show(title, header, rows):
+            t = Table(title=title)
+            for h in header:
+                t.add_column(h, justify="right")
+            for r in rows:
+                t.add_row(*r)
+            con.print(t)
+    except ImportError:  # plain aligned text
+        def show(title, header, rows):
+            w = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
+            print(f"\n{title}")
+            print("  ".join(h.rjust(w[i]) for i, h in enumerate(header)))
+            for r in rows:
+                print("  ".join(c.rjust(w[i]) for i, c in enumerate(r)))
+
+    if results.get("compile"):
+        show("Pipeline compile time", [c[0] for c in COMPILE_COLS],
+             [[f(k, d) for _, f in COMPILE_COLS] for k, d in results["compile"].items()])
+    show("Run throughput (dam break)", [c[0] for c in THROUGHPUT_COLS],
+         [[f(r) for _, f in THROUGHPUT_COLS] for r in results["runs"]])
+    for r in results["runs"]:
+        show(f"Stages, N={r['n']:,}, {r['threads']} thread(s), "
+             f"{r['stage_breakdown']['ms_per_step']:.2f} ms/step instrumented",
+             ["stage", "calls/step", "ms/call", "ms/step", "share"], stage_rows(r))
+
+
+def write_markdown(results, path: Path):
+    meta = results["meta"]
+    lines = [f"# Engine benchmark ({meta['date']})", "",
+             f"Case: {meta['case']}", "",
+             f"Machine: {meta['cpu']}, {meta['cores']} cores; python {meta['python']}, "
+             f"numba {meta['numba']} (threading layer {meta['threading_layer']}), "
+             f"numpy {meta['numpy']}; commit {meta['commit']}.", "",
+             f"Command: `{meta['command']}`", ""]
+    if results.get("compile"):
+        lines += ["## Compile time", "",
+                  "cold = fresh SPHFOAM_CACHE_DIR and NUMBA_CACHE_DIR in a new process; "
+                  "cached = a second new process on the same directories. "
+                  "`compile_seconds` is `Pipeline.compile_seconds`; *1st step JIT* is the "
+                  "first step minus the second (engine helpers: cell list, integrator, "
+                  "time step).", "",
+                  markdown_table([c[0] for c in COMPILE_COLS],
+                                 [[f(k, d) for _, f in COMPILE_COLS]
+                                  for k, d in results["compile"].items()]), ""]
+    lines += ["## Throughput", "",
+              "particle-force-evals = N x steps x force_evaluations_per_step (2 for "
+              "monaghan2007); pair interactions = ordered pairs a != b within the support "
+              "x force evaluations (the density_rate pass, a third pair loop per step, "
+              "is not counted; see JSON `pair_loop_visits_per_s`). speedup = vs the first "
+              "thread count. launch = median wall time of an empty numba prange region at "
+              "that thread count (a few us on an idle machine; milliseconds when another "
+              "process holds a core); cpu util = process CPU time / (wall x threads) in the "
+              "timed window; busy before = all-CPU load just before the configuration.",
+              "",
+              markdown_table([c[0] for c in THROUGHPUT_COLS],
+                             [[f(r) for _, f in THROUGHPUT_COLS] for r in results["runs"]]),
+              "", "## Neighbours", "",
+              markdown_table(["N", "pairs", "mean nbrs (all / fluid)", "candidates / pair",
+                              "wall-a pairs", "wall-wall pairs"],
+                             [[f"{r['n']:,}", f"{r['neighbours_start']['pairs']:,}",
+                               f"{r['neighbours_start']['mean_neighbours']:.1f} / "
+                               f"{r['neighbours_start']['mean_neighbours_fluid']:.1f}",
+                               f"{r['neighbours_start']['candidates'] / r['neighbours_start']['pairs']:.2f}",
+                               f"{r['neighbours_start']['pairs_wall_a']:,}",
+                               f"{r['neighbours_start']['pairs_wall_wall']:,}"]
+                              for r in results["runs"] if r["threads"] == results["runs"][0]["threads"]]),
+              "", "## Stages", ""]
+    for r in results["runs"]:
+        lines += [f"**N = {r['n']:,}, {r['threads']} thread(s)** — "
+                  f"{r['stage_breakdown']['ms_per_step']:.2f} ms/step instrumented, "
+                  f"{r['ms_per_step']:.2f} ms/step plain; rates {r['ns_per_pair_rates']:.1f} "
+                  f"ns/pair x thread, density_rate {r['ns_per_pair_density_rate']:.1f} "
+                  "ns/pair x thread", "",
+                  markdown_table(["stage", "calls/step", "ms/call", "ms/step", "share"],
+                                 stage_rows(r)), ""]
+    path.write_text("\n".join(lines))
+
+
+def meta(args):
+    import numba
+    import numpy as np
+
+    cpu = platform.processor() or "?"
+    try:
+        for ln in Path("/proc/cpuinfo").read_text().splitlines():
+            if ln.startswith("model name"):
+                cpu = ln.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO,
+                                capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "sphfoam"], cwd=REPO,
+                               capture_output=True, text=True).stdout.strip()
+        commit += " (sphfoam/ modified)" if dirty else ""
+    except OSError:
+        commit = "?"
+    try:
+        layer = numba.threading_layer()
+    except ValueError:
+        layer = "not yet initialised"
+    return dict(date=_dt.datetime.now().isoformat(timespec="seconds"), cpu=cpu,
+                cores=os.cpu_count(), numba_max_threads=numba.config.NUMBA_NUM_THREADS,
+                python=platform.python_version(), numba=numba.__version__,
+                numpy=np.__version__, threading_layer=layer, commit=commit,
+                command=" ".join([Path(sys.argv[0]).name] + sys.argv[1:]),
+                case=(f"dam break, column {H} m x {H} m, tank {TANK_LENGTH * H} m long, walls "
+                      f"{TANK_HEIGHT * H} m high, {LAYERS} layers of stationary ghosts; "
+                      f"h = {HDX} dx; " + ", ".join(f"{f}={s['type']}" for f, s in MODELS) +
+                      f", alpha 0.1; integrator {INTEGRATOR['type']}, beta {BETA}"),
+                env={k: os.environ.get(k) for k in ("OMP_WAIT_POLICY", "NUMBA_THREADING_LAYER",
+                                                    "NUMBA_NUM_THREADS", "OMP_NUM_THREADS")},
+                loadavg=os.getloadavg(),
+                args={k: v for k, v in vars(args).items() if not k.startswith("_")})
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 40_000, 160_000],
+                    help="target total particle counts (default: 10000 40000 160000)")
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2],
+                    help="numba thread counts (default: 1 2)")
+    ap.add_argument("--seconds", type=float, default=3.0,
+                    help="minimum timed seconds per measurement (default 3)")
+    ap.add_argument("--stage-seconds", type=float, default=None,
+                    help="seconds of the instrumented stage pass (default: = --seconds / 2)")
+    ap.add_argument("--warmup", type=int, default=20, help="warm-up steps (default 20)")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke run: 10k particles, 1 s per measurement, tag 'quick'")
+    ap.add_argument("--no-compile", action="store_true", help="skip the compile-time part")
+    ap.add_argument("--compile-n", type=int, default=2000,
+                    help="particles of the case the compile subprocesses step (default 2000)")
+    ap.add_argument("--wait-idle", type=float, default=60.0,
+                    help="before each configuration wait up to this many seconds for the "
+                    "machine to be idle (< 15%% busy; 0 = do not wait; default 60)")
+    ap.add_argument("--tag", default=None, help="suffix of the result file names")
+    ap.add_argument("--out-dir", type=Path, default=HERE / "results")
+    ap.add_argument("--_compile-child", type=int, default=None, help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+
+    if args._compile_child is not None:
+        compile_child(args._compile_child)
+        return 0
+    if args.quick:
+        args.sizes = [10_000]
+        args.seconds = 1.0
+        args.tag = "quick" if args.tag is None else args.tag
+    if args.stage_seconds is None:
+        args.stage_seconds = max(0.5, args.seconds / 2)
+
+    results = {"compile": None, "runs": []}
+    if not args.no_compile:
+        with tempfile.TemporaryDirectory(prefix="sphfoam-bench-") as tmp:
+            busy = wait_idle(args.wait_idle) if args.wait_idle > 0 else cpu_busy()
+            print(f"compile: cold and cached builds in subprocesses (cache {tmp}; machine "
+                  f"{100 * busy:.0f}% busy) ...", flush=True)
+            results["compile"] = measure_compile(Path(tmp), args.compile_n)
+            results["compile"]["cold"]["machine_busy_before"] = busy
+            for k, d in results["compile"].items():
+                print(f"  {k}: compile_seconds {d['compile_seconds']:.2f} s, import+build "
+                      f"{d['import_build_s']:.2f} s, cache_hit {d['cache_hit']}", flush=True)
+
+    # this process builds into a private cache as well (does not touch ~/.cache/sphfoam)
+    with tempfile.TemporaryDirectory(prefix="sphfoam-bench-run-") as tmp:
+        os.environ["SPHFOAM_CACHE_DIR"] = tmp
+        import numba
+
+        maxthr = numba.config.NUMBA_NUM_THREADS
+        threads = [t for t in args.threads if 1 <= t <= maxthr]
+        if len(threads) != len(args.threads):
+            print(f"note: numba allows at most {maxthr} threads; running {threads}")
+        args.threads = threads
+        for total in args.sizes:
+            base = None
+            for thr in threads:
+                print(f"run: N ~ {total:,}, {thr} thread(s) ...", flush=True)
+                r = bench_config(total, thr, args)
+                base = base or r["ms_per_step"]      # speedup vs the first thread count
+                r["speedup"] = base / r["ms_per_step"]
+                ck = r["neighbours_start"].get("pairs_kdtree")
+                if ck is not None and ck != r["neighbours_start"]["pairs"]:
+                    print(f"  WARNING: pair count {r['neighbours_start']['pairs']} != "
+                          f"cKDTree {ck}")
+                print(f"  N={r['n']:,}: {r['steps']} steps, {r['ms_per_step']:.2f} ms/step, "
+                      f"{_si(r['particle_steps_per_s'])} particle-steps/s, parallel launch "
+                      f"{r['parallel_launch_us']:.0f} us, cpu util "
+                      f"{100 * r['cpu_utilisation']:.0f}%", flush=True)
+                if r["parallel_launch_us"] > 500 or r["machine_busy_before"] > 0.15:
+                    print("  WARNING: the machine is shared (another process is using the "
+                          "CPUs); timings, 2-thread ones above all, are not representative",
+                          flush=True)
+                results["runs"].append(r)
+        results["meta"] = meta(args)
+
+    print_tables(results)
+    args.out_dir.mkdir(parents=True, exist_ok=True)
+    day = _dt.date.today().isoformat()
+    suffix = f"-{args.tag}" if args.tag else ""
+    jpath = args.out_dir / f"engine-{day}{suffix}.json"
+    mpath = args.out_dir / f"engine-latest{suffix}.md"
+    jpath.write_text(json.dumps(results, indent=1, default=str))
+    write_markdown(results, mpath)
+    print(f"wrote {jpath.relative_to(REPO) if jpath.is_relative_to(REPO) else jpath} and "
+          f"{mpath.relative_to(REPO) if mpath.is_relative_to(REPO) else mpath}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

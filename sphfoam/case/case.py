@@ -1,0 +1,183 @@
+"""A case directory: reading, validating and assembling everything a run needs.
+
+Layout (OpenFOAM conventions)::
+
+    constant/transportProperties   rho0, nu
+    constant/g                     gravity vector
+    constant/sphProperties         kernel, equationOfState, continuity, momentum, viscosity,
+                                   boundary, turbulence, densityFilter, velocityCorrection,
+                                   kernelCorrection  -- each ``{ type name; coeffs }``
+    system/controlDict             time control, writing, function objects
+    system/sphSchemes              integrator, time-step control, neighbour search
+    system/particleDict            spacing, fluid blocks, walls, domain (for ``sphfoam setup``)
+    0/ 0.5/ 1/ ...                 time directories (particles in lagrangian/particles/)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+from pydantic import ValidationError
+
+from sphfoam import registry
+from sphfoam.case import foamdict
+from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
+from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, ParticleDict, SphSchemes,
+                                  TransportProperties)
+from sphfoam.models.base import CaseContext
+
+FILES = {
+    "controlDict": ("system/controlDict", ControlDict),
+    "sphSchemes": ("system/sphSchemes", SphSchemes),
+    "particleDict": ("system/particleDict", ParticleDict),
+    "transportProperties": ("constant/transportProperties", TransportProperties),
+    "g": ("constant/g", Gravity),
+}
+SPH_PROPERTIES = "constant/sphProperties"
+
+
+def _strip_header(d: dict) -> dict:
+    return {k: v for k, v in d.items() if k != "FoamFile"}
+
+
+@dataclass
+class Models:
+    """The models a case selects, instantiated and validated."""
+
+    sph: dict[str, registry.Model]
+    integrator: registry.Model
+    functions: dict[str, registry.Model]
+
+
+class Case:
+    """A case directory. Properties read and validate lazily; :meth:`validate` reads all."""
+
+    def __init__(self, path):
+        self.path = Path(path).resolve()
+        self.name = self.path.name
+
+    # --- raw dictionaries ----------------------------------------------------------------
+    def read_dict(self, rel: str, required: bool = True) -> dict:
+        f = self.path / rel
+        if not f.is_file():
+            if not required:
+                return {}
+            raise CaseError.single(rel, "", f"file not found in case {self.path}")
+        try:
+            return _strip_header(foamdict.parse(f.read_text(), filename=rel,
+                                                include_dir=f.parent))
+        except foamdict.FoamDictError as e:
+            raise CaseError([Problem(rel, "", f"syntax error: {e}")]) from None
+
+    def _validated(self, key: str):
+        rel, schema = FILES[key]
+        raw = self.read_dict(rel)
+        try:
+            return schema.model_validate(raw)
+        except ValidationError as e:
+            raise from_validation(e, rel, schema) from None
+
+    @cached_property
+    def control(self) -> ControlDict:
+        return self._validated("controlDict")
+
+    @cached_property
+    def schemes(self) -> SphSchemes:
+        rel = FILES["sphSchemes"][0]
+        if not (self.path / rel).is_file():
+            return SphSchemes()
+        return self._validated("sphSchemes")
+
+    @cached_property
+    def particles(self) -> ParticleDict:
+        return self._validated("particleDict")
+
+    @cached_property
+    def transport(self) -> TransportProperties:
+        return self._validated("transportProperties")
+
+    @cached_property
+    def gravity(self) -> tuple[float, float]:
+        return self._validated("g").value
+
+    # --- models --------------------------------------------------------------------------
+    @cached_property
+    def models(self) -> Models:
+        raw = self.read_dict(SPH_PROPERTIES)
+        problems: list[Problem] = []
+        unknown = [k for k in raw if k not in SPH_FAMILIES]
+        for k in unknown:
+            problems.append(Problem(SPH_PROPERTIES, k, f"unknown key '{k}'"
+                                    f"{did_you_mean(k, SPH_FAMILIES)} valid keys: "
+                                    f"{', '.join(SPH_FAMILIES)}"))
+        sph = {}
+        for family, default in SPH_FAMILIES.items():
+            spec = raw.get(family, None if default is None else {"type": default})
+            if spec is None:
+                problems.append(Problem(SPH_PROPERTIES, family,
+                                        f"required; choose a type from: "
+                                        f"{', '.join(registry.names(family))}"))
+                continue
+            mdl = self._build(family, spec, SPH_PROPERTIES, family, problems)
+            if mdl is not None:
+                sph[family] = mdl
+        integ = self._build("integrator", self.schemes.integrator.model_dump(),
+                            FILES["sphSchemes"][0], "integrator", problems)
+        functions = {}
+        for name, spec in self.control.functions.items():
+            fo = self._build("functionObject", spec, FILES["controlDict"][0],
+                             f"functions.{name}", problems)
+            if fo is not None:
+                fo.object_name = name
+                functions[name] = fo
+        if problems:
+            raise CaseError(problems)
+        return Models(sph, integ, functions)
+
+    @staticmethod
+    def _build(family, spec, file, key, problems):
+        if not isinstance(spec, dict) or "type" not in spec:
+            problems.append(Problem(file, key, f"expected a sub-dictionary with a 'type' entry; "
+                                    f"registered: {', '.join(registry.names(family))}"))
+            return None
+        try:
+            return registry.build(family, spec)
+        except registry.UnknownModel as e:
+            problems.append(Problem(file, f"{key}.type", str(e)))
+        except ValidationError as e:
+            cls = registry.get(family, str(spec["type"]))
+            problems.extend(from_validation(e, file, cls.Coeffs, prefix=key).problems)
+        return None
+
+    # --- derived -------------------------------------------------------------------------
+    @cached_property
+    def context(self) -> CaseContext:
+        pd = self.particles
+        kernel = self.models.sph["kernel"]
+        h = kernel.coeffs.hdx * pd.dx
+        heights = []
+        for region in pd.fluid.values():
+            ys = [region.min[1], region.max[1]] if region.type == "box" else \
+                [p[1] for p in region.points]
+            heights.append(max(ys) - min(ys))
+        ctx = CaseContext(dx=pd.dx, h=h, rho0=self.transport.rho0, nu=self.transport.nu,
+                          g=self.gravity, fluid_height=max(heights))
+        c0 = self.models.sph["equationOfState"].c0(ctx)
+        return CaseContext(**{**ctx.__dict__, "c0": c0})
+
+    def validate(self) -> None:
+        """Read and validate every dictionary, collecting all problems into one error."""
+        problems: list[Problem] = []
+        for attr in ("control", "schemes", "particles", "transport", "gravity", "models"):
+            try:
+                getattr(self, attr)
+            except CaseError as e:
+                problems.extend(e.problems)
+        if problems:
+            raise CaseError(problems)
+        if not math.isfinite(self.context.c0) or self.context.c0 <= 0:
+            raise CaseError.single(SPH_PROPERTIES, "equationOfState",
+                                   "speed of sound is not positive; set vmax or speedOfSound")

@@ -1,0 +1,203 @@
+"""pydantic schemas of every case dictionary. Unknown keys are errors everywhere.
+
+Dictionary values arrive from :mod:`sphfoam.case.foamdict` as words, numbers, tuples and
+lists; OpenFOAM switches (yes/no/on/off/true/false) become bools, dimensioned scalars such as
+``nu [0 2 -1 0 0 0 0] 1e-06;`` are checked against their expected dimensions.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+
+from sphfoam.case.foamdict import DimensionSet
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+
+def _vector2(v: Any) -> tuple[float, float]:
+    """(x y) or (x y z) with z = 0 (a 2-D case)."""
+    if isinstance(v, (list, tuple)) and len(v) in (2, 3) and all(
+            isinstance(c, (int, float)) for c in v):
+        if len(v) == 3 and v[2] != 0:
+            raise ValueError("sphfoam is two-dimensional (x, y): the z component must be 0")
+        return (float(v[0]), float(v[1]))
+    raise ValueError(f"expected a vector (x y), got {v!r}")
+
+
+Vector2 = Annotated[tuple[float, float], BeforeValidator(_vector2)]
+
+
+def dimensioned(dims: tuple[int, ...]):
+    """Accept ``value``, ``[dims] value`` or ``name [dims] value``; check the dimensions."""
+
+    def check(v: Any) -> Any:
+        if isinstance(v, tuple):
+            items = [i for i in v if not isinstance(i, str)]
+            dimset = [i for i in items if isinstance(i, DimensionSet)]
+            nums = [i for i in items if isinstance(i, (int, float))]
+            if len(nums) != 1:
+                raise ValueError(f"expected [dimensions] value, got {' '.join(map(str, v))}")
+            if dimset:
+                got = tuple(int(x) for x in dimset[0])
+                if got[:len(dims)] != dims[:len(got)] or any(got[len(dims):]):
+                    raise ValueError(f"dimensions {list(got)} do not match the expected "
+                                     f"{list(dims)}")
+            return nums[0]
+        return v
+
+    return BeforeValidator(check)
+
+
+# --- system/controlDict -------------------------------------------------------------------
+class ControlDict(Strict):
+    application: str = "sphfoam"
+    startFrom: Literal["startTime", "latestTime"] = "latestTime"
+    startTime: float = 0.0
+    stopAt: Literal["endTime"] = "endTime"
+    endTime: float = Field(gt=0)
+    deltaT: float = Field(gt=0, description="first (or, with adjustTimeStep no, fixed) step")
+    adjustTimeStep: bool = True
+    maxCo: float = Field(0.2, gt=0, le=2.0,
+                         description="beta of the time-step conditions T(3.88), T(3.90)")
+    maxDeltaT: float = Field(math.inf, gt=0)
+    writeControl: Literal["timeStep", "runTime", "adjustableRunTime"] = "adjustableRunTime"
+    writeInterval: float = Field(gt=0)
+    purgeWrite: int = Field(0, ge=0)
+    writeFormat: Literal["binary", "ascii"] = "binary"
+    writePrecision: int = Field(6, ge=1, le=17)
+    timePrecision: int = Field(6, ge=1, le=17)
+    functions: dict[str, dict[str, Any]] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.writeControl == "timeStep" and self.writeInterval != int(self.writeInterval):
+            raise ValueError("writeInterval must be a whole number of steps with "
+                             "writeControl timeStep")
+        return self
+
+
+# --- system/sphSchemes ---------------------------------------------------------------------
+class ModelSpec(BaseModel):
+    """``{ type name; coeffs... }``: the coefficients are validated by the model itself."""
+
+    model_config = ConfigDict(extra="allow")
+    type: str
+
+
+class TimeStepControl(Strict):
+    forceCondition: bool = Field(True, description="also limit by sqrt(h/|F|), T(3.90)")
+
+
+class NeighbourSearch(Strict):
+    type: Literal["cellLinkedList"] = "cellLinkedList"
+    cellSizeFactor: float = Field(1.05, ge=1.0, le=2.0, description=(
+        "cell side in units of the kernel support; the margin above 1 covers the motion of "
+        "particles between the re-sort at the start of a step and its later stages"))
+
+
+class SphSchemes(Strict):
+    integrator: ModelSpec = ModelSpec(type="monaghan2007")
+    timeStepControl: TimeStepControl = TimeStepControl()
+    neighbourSearch: NeighbourSearch = NeighbourSearch()
+
+
+# --- constant/ -----------------------------------------------------------------------------
+class TransportProperties(Strict):
+    rho0: Annotated[float, dimensioned((1, -3, 0, 0, 0, 0, 0))] = Field(1000.0, gt=0)
+    nu: Annotated[float, dimensioned((0, 2, -1, 0, 0, 0, 0))] = Field(1e-6, ge=0)
+
+
+class Gravity(Strict):
+    dimensions: DimensionSet | None = None
+    value: Vector2
+
+    @field_validator("dimensions", mode="before")
+    @classmethod
+    def _dims(cls, v):
+        if v is not None and tuple(int(x) for x in v)[:3] != (0, 1, -2):
+            raise ValueError(f"g must have dimensions [0 1 -2 0 0 0 0], got {list(v)}")
+        return v
+
+    model_config = ConfigDict(extra="forbid", arbitrary_types_allowed=True)
+
+
+#: families chosen in constant/sphProperties, with the default a case gets when it is silent
+SPH_FAMILIES: dict[str, str | None] = {
+    "kernel": None,
+    "equationOfState": "tait",
+    "continuity": "differenceForm",
+    "momentum": "symmetric",
+    "viscosity": None,
+    "boundary": None,
+    "turbulence": "none",
+    "densityFilter": "none",
+    "velocityCorrection": "none",
+    "kernelCorrection": "none",
+}
+
+
+# --- system/particleDict -------------------------------------------------------------------
+class BoxRegion(Strict):
+    type: Literal["box"]
+    min: Vector2
+    max: Vector2
+
+    @model_validator(mode="after")
+    def _order(self):
+        if not (self.max[0] > self.min[0] and self.max[1] > self.min[1]):
+            raise ValueError(f"box max {self.max} must exceed min {self.min} in x and y")
+        return self
+
+
+class PolygonRegion(Strict):
+    type: Literal["polygon"]
+    points: list[Vector2] = Field(min_length=3)
+
+
+FluidRegion = Annotated[BoxRegion | PolygonRegion, Field(discriminator="type")]
+
+
+class BoxWalls(Strict):
+    """A rectangular tank: wall rows outside ``min``..``max``; ``open`` sides get none."""
+
+    type: Literal["box"]
+    min: Vector2
+    max: Vector2
+    layers: int = Field(3, ge=1, le=10)
+    open: list[Literal["top", "bottom", "left", "right"]] = Field(default_factory=lambda: ["top"])
+
+    @field_validator("open", mode="before")
+    @classmethod
+    def _one(cls, v):
+        return [v] if isinstance(v, str) else v
+
+
+class PolylineWalls(Strict):
+    """Wall rows along a polyline; the solid lies on ``side`` of the direction of travel."""
+
+    type: Literal["polyline"]
+    points: list[Vector2] = Field(min_length=2)
+    layers: int = Field(3, ge=1, le=10)
+    side: Literal["left", "right"] = "right"
+
+
+WallRegion = Annotated[BoxWalls | PolylineWalls, Field(discriminator="type")]
+
+
+class Domain(Strict):
+    min: Vector2
+    max: Vector2
+
+
+class ParticleDict(Strict):
+    dx: float = Field(gt=0, description="initial particle spacing")
+    fluid: dict[str, FluidRegion] = Field(min_length=1)
+    walls: dict[str, WallRegion] = Field(default_factory=dict)
+    domain: Domain | None = Field(None, description=(
+        "particles leaving this box are removed (and reported); default: the box around all "
+        "initial particles, enlarged by half its size upwards and 10 dx elsewhere"))

@@ -1,0 +1,168 @@
+"""The ``sphfoam`` command: one utility per job, like OpenFOAM's."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.console import Console
+from rich.panel import Panel
+from rich.table import Table
+
+from sphfoam import __version__
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="sphfoam: SPH for free-surface water flows, driven like an OpenFOAM case.")
+export_app = typer.Typer(no_args_is_help=True, help="Export results for other tools.")
+app.add_typer(export_app, name="export")
+console = Console()
+err_console = Console(stderr=True)
+_state = {"debug": False}
+
+
+def _fail(title: str, body: str, code: int = 2):
+    err_console.print(Panel(body, title=title, border_style="red", expand=False))
+    raise typer.Exit(code)
+
+
+def _guard(fn, *args, **kwargs):
+    """Run ``fn``; turn user-facing errors into one screen, no traceback (unless --debug)."""
+    from sphfoam.case.errors import CaseError
+
+    try:
+        return fn(*args, **kwargs)
+    except CaseError as e:
+        if _state["debug"]:
+            raise
+        _fail("case error", "\n".join(f"• {p}" for p in e.problems))
+    except (FileNotFoundError, ValueError, KeyError) as e:
+        if _state["debug"]:
+            raise
+        _fail("error", f"{type(e).__name__}: {e}")
+
+
+def _case(path: Path):
+    from sphfoam.case.case import Case
+
+    if not path.is_dir():
+        _fail("case error", f"{path}: not a case directory (expected constant/ and system/)")
+    return Case(path)
+
+
+def _threads(n: Optional[int]):
+    if n:
+        import numba
+
+        numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
+
+
+@app.callback()
+def main_callback(debug: bool = typer.Option(False, "--debug", help="show tracebacks"),
+                  version: bool = typer.Option(False, "--version", help="print the version")):
+    _state["debug"] = debug
+    if version:
+        console.print(f"sphfoam {__version__}")
+        raise typer.Exit()
+
+
+@app.command()
+def run(case: Path = typer.Argument(Path("."), help="case directory"),
+        threads: Optional[int] = typer.Option(None, "--threads", "-j", help="numba threads"),
+        end_time: Optional[float] = typer.Option(None, "--end-time",
+                                                 help="stop here instead of endTime"),
+        no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar")):
+    """Run CASE from its start time (setting up particles first if 0/ has none)."""
+    from sphfoam.runner import run_case
+
+    _threads(threads)
+    c = _case(case)
+    try:
+        rep = _guard(run_case, c, progress=not no_progress and sys.stderr.isatty(),
+                     echo=console.print, end_time=end_time)
+    except KeyboardInterrupt:
+        err_console.print("[yellow]interrupted: the current state was written; "
+                          "`sphfoam run` continues from it (startFrom latestTime).")
+        raise typer.Exit(130)
+    console.print(f"[green]done[/]: {rep.steps} steps, {rep.particles} particles, run "
+                  f"{rep.run_seconds:.1f} s + compile {rep.compile_seconds:.1f} s "
+                  f"({'cached' if rep.cache_hit else 'cold'}); "
+                  f"{rep.particle_steps_per_second:.3g} particle-steps/s")
+
+
+@app.command()
+def setup(case: Path = typer.Argument(Path("."), help="case directory"),
+          force: bool = typer.Option(False, "--force", help="overwrite existing particles in 0/")):
+    """Generate particles from system/particleDict into 0/ (hydrostatic, at rest)."""
+    from sphfoam.io.fields import has_particles
+    from sphfoam.runner import setup_case
+
+    c = _case(case)
+    if has_particles(c.path / "0") and not force:
+        _fail("setup", f"{c.path / '0'} already holds particles; use --force to overwrite")
+    _guard(setup_case, c, console.print)
+
+
+@app.command()
+def check(case: Path = typer.Argument(Path("."), help="case directory")):
+    """Validate every dictionary of CASE without running it."""
+    c = _case(case)
+    _guard(c.validate)
+    ctx = c.context
+    t = Table(title=f"{c.name}: valid", show_header=False)
+    for fam, m in c.models.sph.items():
+        t.add_row(fam, m.name, str(dict(m.coeffs)) if m.coeffs.model_fields else "")
+    t.add_row("integrator", c.models.integrator.name, "")
+    for name, fo in c.models.functions.items():
+        t.add_row("function", f"{name} ({fo.name})", "")
+    t.add_row("dx, h, c0", f"{ctx.dx:g} m, {ctx.h:g} m, {ctx.c0:.4g} m/s", "")
+    t.add_row("time", f"0 .. {c.control.endTime:g} s, write every {c.control.writeInterval:g} "
+              f"({c.control.writeControl})", "")
+    console.print(t)
+
+
+@app.command()
+def models(family: Optional[str] = typer.Argument(None, help="only this family")):
+    """List the registered models (the words you may write after `type`)."""
+    from sphfoam import registry
+
+    fams = registry.families()
+    if family and family not in fams:
+        from sphfoam.case.errors import did_you_mean
+
+        _fail("models", f"unknown family '{family}'{did_you_mean(family, fams)} "
+              f"families: {', '.join(fams)}")
+    for fam, entries in fams.items():
+        if family and fam != family:
+            continue
+        t = Table(title=f"{fam}: {registry.FAMILIES[fam]}", title_justify="left")
+        t.add_column("type", style="bold")
+        t.add_column("description")
+        t.add_column("coefficients (default)")
+        for name, cls in entries.items():
+            coeffs = ", ".join(f"{k} ({f.default})" for k, f in cls.Coeffs.model_fields.items())
+            t.add_row(name, cls.doc, coeffs)
+        if not entries:
+            t.add_row("-", "(none registered yet)", "")
+        console.print(t)
+
+
+@export_app.command("vtk")
+def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
+               time: Optional[list[float]] = typer.Option(None, "--time", "-t",
+                                                          help="only these times")):
+    """Write VTK/<case>_<i>.vtp per time directory and a VTK/<case>.pvd for ParaView."""
+    from sphfoam.io.vtk import export_case
+
+    c = _case(case)
+    pvd = _guard(export_case, c.path, times=time)
+    console.print(f"wrote {pvd}")
+
+
+def main():
+    app()
+
+
+if __name__ == "__main__":
+    main()

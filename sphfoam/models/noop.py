@@ -1,0 +1,22 @@
+"""The ``none`` entry of families whose real models arrive in later releases of sphfoam.
+
+Selecting ``none`` adds nothing to the generated pipeline (it costs nothing).
+"""
+
+from __future__ import annotations
+
+from sphfoam.models.base import PipelineModel
+from sphfoam.registry import register
+
+
+def _none(family_name: str, what: str):
+    cls = type(f"No_{family_name}", (PipelineModel,), {
+        "family": family_name, "name": "none", "doc": f"no {what} (adds nothing to the pipeline)",
+        "__doc__": f"No {what}."})
+    return register(cls)
+
+
+NoTurbulence = _none("turbulence", "turbulence model: the laminar equations")
+NoDensityFilter = _none("densityFilter", "density filter")
+NoVelocityCorrection = _none("velocityCorrection", "velocity correction")
+NoKernelCorrection = _none("kernelCorrection", "kernel correction")

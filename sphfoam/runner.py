@@ -1,0 +1,286 @@
+"""Running a case: set-up, start time, the time loop, writing, logging, function objects.
+
+Python here acts once per step (or per write); the particle work is all in the compiled
+pipeline and the integrator's numba kernels.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import time as wallclock
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from sphfoam import __version__, registry
+from sphfoam.case import foamdict
+from sphfoam.case.case import Case
+from sphfoam.case.errors import CaseError
+from sphfoam.case.times import list_times, time_name
+from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.simulation import Simulation
+from sphfoam.engine.state import ParticleState
+from sphfoam.io.fields import has_particles, read_state, write_state
+from sphfoam.setup.particles import default_domain, generate
+
+
+class Log:
+    """``log.sphfoam`` in the case (appended on restart) plus an optional echo."""
+
+    def __init__(self, path: Path, echo=None):
+        self.fh = path.open("a")
+        self.echo = echo
+
+    def __call__(self, msg: str):
+        self.fh.write(msg + "\n")
+        self.fh.flush()
+        if self.echo:
+            self.echo(msg)
+
+    def close(self):
+        self.fh.close()
+
+
+@dataclass
+class RunReport:
+    start_time: float
+    end_time: float
+    steps: int
+    particles: int
+    compile_seconds: float
+    cache_hit: bool
+    run_seconds: float
+    written: list[str] = field(default_factory=list)
+    removed: int = 0
+
+    @property
+    def particle_steps_per_second(self) -> float:
+        return self.particles * self.steps / max(self.run_seconds, 1e-12)
+
+
+# --- set-up --------------------------------------------------------------------------------
+def setup_case(case: Case, log=print) -> ParticleState:
+    """Generate particles from system/particleDict and write them to ``0/``."""
+    case.validate()
+    eos = case.models.sph["equationOfState"]
+    state = generate(case.particles, case.context, eos)
+    sim_p = eos.B(case.context) * ((state.rho / case.context.rho0) ** eos.coeffs.gamma - 1.0)
+    write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
+    log(f"setup: {state.n_fluid} fluid + {state.n - state.n_fluid} wall particles "
+        f"(dx = {case.particles.dx:g} m) written to {case.path / '0'}")
+    return state
+
+
+def write_time(case: Case, state: ParticleState, t: float, index: int, dt: float, p=None,
+               name: str | None = None) -> Path:
+    c = case.control
+    folder = case.path / (name or time_name(t, c.timePrecision))
+    write_state(folder, state.to_fields(p), fmt=c.writeFormat, precision=c.writePrecision)
+    foamdict.write(folder / "uniform" / "time",
+                   {"value": float(t), "name": foamdict.QuotedString(folder.name), "index": int(index),
+                    "deltaT": float(dt)},
+                   header={"class": "dictionary", "location": f"{folder.name}/uniform",
+                           "object": "time"})
+    return folder
+
+
+def read_time_value(folder: Path) -> tuple[float, int]:
+    f = folder / "uniform" / "time"
+    if f.is_file():
+        d = foamdict.read(f)
+        return float(d["value"]), int(d.get("index", 0))
+    return float(folder.name), 0
+
+
+def start_folder(case: Case) -> Path | None:
+    times = [(t, p) for t, p in list_times(case.path) if has_particles(p)]
+    if not times:
+        return None
+    if case.control.startFrom == "latestTime":
+        return times[-1][1]
+    want = case.control.startTime
+    for t, p in times:
+        if abs(t - want) <= 1e-9 * max(1.0, abs(want)):
+            return p
+    raise CaseError.single("system/controlDict", "startTime",
+                           f"no time directory with particles at {want:g}; have: "
+                           + ", ".join(p.name for _, p in times))
+
+
+# --- the run -------------------------------------------------------------------------------
+def build_simulation(case: Case, state: ParticleState) -> Simulation:
+    ctx = case.context
+    sph = case.models.sph
+    kernel = sph["kernel"]
+    sel = Selection(kernel, sph["equationOfState"], sph["continuity"], sph["momentum"],
+                    sph["viscosity"], sph["boundary"],
+                    adjust_time_step=case.control.adjustTimeStep)
+    h = ctx.h
+    core = dict(h=h, inv_h=1.0 / h, support2=(kernel.support * h) ** 2, eta2=0.01 * h * h,
+                gx=ctx.g[0], gy=ctx.g[1])
+    pipe = build_pipeline(sel, ctx, core)
+    lo, hi = default_domain(case.particles)
+    c = case.control
+    return Simulation(state, pipe, case.models.integrator, h=h, support=kernel.support,
+                      domain_lo=lo, domain_hi=hi, beta=c.maxCo,
+                      force_condition=case.schemes.timeStepControl.forceCondition,
+                      adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
+                      max_delta_t=c.maxDeltaT,
+                      cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor)
+
+
+def run_case(case: Case | str | Path, *, progress: bool = True, echo=print,
+             end_time: float | None = None) -> RunReport:
+    """Run a case from its start time to endTime (or ``end_time``)."""
+    case = case if isinstance(case, Case) else Case(case)
+    case.validate()
+    c = case.control
+    log = Log(case.path / "log.sphfoam", echo)
+    try:
+        return _run(case, c, log, progress, end_time if end_time is not None else c.endTime)
+    finally:
+        log.close()
+
+
+def _run(case, c, log, progress, t_end) -> RunReport:
+    log(f"sphfoam {__version__}: case {case.path}")
+    folder = start_folder(case)
+    if folder is None:
+        log("no particles in any time directory: running setup first")
+        setup_case(case, log)
+        folder = case.path / "0"
+    t0, index = read_time_value(folder)
+    state = ParticleState.from_fields(read_state(folder))
+    log(f"starting from time {folder.name} ({state.n} particles, {state.n_fluid} fluid)")
+    sim = build_simulation(case, state)
+    sim.time, sim.step_index = t0, index
+    sel = sim.pipeline.selection
+    log(f"models: {sel.describe()}, integrator={case.models.integrator.name}")
+    log(f"h = {case.context.h:g} m, c0 = {case.context.c0:.4g} m/s, maxCo = {c.maxCo:g}")
+    log(f"pipeline: {sim.pipeline.source_path}")
+    log(f"compile: {sim.pipeline.compile_seconds:.2f} s "
+        f"({'loaded from cache' if sim.pipeline.cache_hit else 'compiled'})")
+
+    def on_removal(rem):
+        cx, cy = rem.where.mean(axis=0)
+        log(f"time {sim.time:.6g}: removed {rem.count} particle(s) that left the domain "
+            f"near ({cx:.4g}, {cy:.4g}); ids {rem.ids[:10].tolist()}"
+            f"{' ...' if rem.count > 10 else ''}")
+
+    sim.on_removal = on_removal
+    functions = case.models.functions
+    start_name = folder.name
+    for fo in functions.values():
+        fo.start(case, case.context, start_name)
+        fo.execute(sim)
+
+    report = RunReport(t0, t_end, 0, state.n, sim.pipeline.compile_seconds,
+                       sim.pipeline.cache_hit, 0.0)
+    written: list[Path] = []
+    interval = c.writeInterval
+    eps = 1e-9 * max(interval, 1e-300)
+
+    def next_write_time(t):
+        return (math.floor(t / interval + 1e-9) + 1) * interval
+
+    t_write = next_write_time(sim.time) if c.writeControl != "timeStep" else math.inf
+    bar = _Progress(progress, t0, t_end, state.n)
+    wall0 = wallclock.perf_counter()
+    try:
+        while sim.time < t_end - eps:
+            target = min(t_write, t_end) if c.writeControl == "adjustableRunTime" else t_end
+            remaining = target - sim.time
+            dt = sim.step(remaining)
+            landed = dt >= remaining * (1 - 1e-12)
+            if landed:
+                sim.time = target          # land exactly, so restarts see the same time
+            report.steps += 1
+            wrote = False
+            if c.writeControl == "timeStep":
+                wrote = sim.step_index % int(interval) == 0
+            elif sim.time >= t_write - eps or sim.time >= t_end - eps:
+                wrote = True
+            if sim.time >= t_end - eps:
+                wrote = True
+            if wrote:
+                written.append(_write(case, sim, log))
+                _purge(written, c.purgeWrite)
+                while t_write <= sim.time + eps:
+                    t_write = next_write_time(t_write)
+            for fo in functions.values():
+                if fo.due(sim, wrote):
+                    fo.execute(sim)
+            if not np.isfinite(dt) or dt <= 0:
+                raise FloatingPointError(f"time step collapsed to {dt} at time {sim.time}")
+            bar.update(sim, dt)
+    except KeyboardInterrupt:
+        log(f"interrupted at time {sim.time:.6g}: writing the current state")
+        written.append(_write(case, sim, log))
+        raise
+    finally:
+        bar.close()
+        report.run_seconds = wallclock.perf_counter() - wall0
+        report.end_time = sim.time
+        report.particles = sim.state.n
+        report.removed = sum(r.count for r in sim.removals)
+        report.written = [p.name for p in written]
+        for fo in functions.values():
+            fo.end()
+    log(f"end: time {sim.time:.6g} after {report.steps} steps in {report.run_seconds:.2f} s "
+        f"({report.particle_steps_per_second:.3g} particle-steps/s); "
+        f"removed {report.removed} particle(s)")
+    return report
+
+
+def _write(case, sim, log) -> Path:
+    folder = write_time(case, sim.state, sim.time, sim.step_index, sim.last_dt,
+                        p=sim.pressure())
+    log(f"time {folder.name}: written (step {sim.step_index}, dt {sim.last_dt:.4g}, "
+        f"KE {sim.kinetic_energy():.4g} J/m)")
+    return folder
+
+
+def _purge(written: list[Path], keep: int):
+    if keep > 0:
+        while len(written) > keep:
+            shutil.rmtree(written.pop(0), ignore_errors=True)
+
+
+class _Progress:
+    """A rich progress bar: sim time, step, dt, steps/s, particles, ETA."""
+
+    def __init__(self, enabled, t0, t_end, n):
+        self.enabled = enabled
+        self.t0, self.t_end = t0, t_end
+        self.last = 0.0
+        if not enabled:
+            return
+        from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
+                                   TimeRemainingColumn)
+
+        self.p = Progress(TextColumn("[bold]t = {task.fields[t]:.5g} s"), BarColumn(),
+                          TextColumn("step {task.fields[step]}  dt {task.fields[dt]:.3g} s  "
+                                     "{task.fields[rate]:.0f} steps/s  {task.fields[n]} particles"),
+                          TimeElapsedColumn(), TimeRemainingColumn())
+        self.p.start()
+        self.task = self.p.add_task("run", total=max(t_end - t0, 1e-300), t=t0, step=0,
+                                    dt=0.0, rate=0.0, n=n)
+        self.w0 = wallclock.perf_counter()
+        self.steps = 0
+
+    def update(self, sim, dt):
+        if not self.enabled:
+            return
+        self.steps += 1
+        now = wallclock.perf_counter()
+        if now - self.last < 0.2:
+            return
+        self.last = now
+        self.p.update(self.task, completed=sim.time - self.t0, t=sim.time, step=sim.step_index,
+                      dt=dt, rate=self.steps / max(now - self.w0, 1e-9), n=sim.state.n)
+
+    def close(self):
+        if self.enabled:
+            self.p.stop()

@@ -1,0 +1,137 @@
+"""Particle generation from ``system/particleDict`` (the analogue of blockMesh).
+
+Fluid particles sit at the centres of a square lattice of spacing dx, so a block of fluid
+holds exactly its area / dx^2 particles and its surface lies dx/2 beyond the outermost row.
+Wall particles sit at the centres of the lattice cells *behind* the wall line, ``layers``
+rows deep, so the first wall row is dx/2 behind the wall and dx from the first fluid row.
+The initial state is hydrostatic: p = rho0 |g| (eta - y) with eta the local free surface above
+each particle, and rho from the inverse of the equation of state. Masses are rho dx^2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.path import Path as MplPath
+from scipy.spatial import cKDTree
+
+from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict, PolygonRegion, PolylineWalls
+from sphfoam.engine.state import FLUID, WALL, ParticleState
+
+
+def _lattice(lo, hi, dx):
+    """Cell centres of the dx-lattice anchored at ``lo`` that lie inside [lo, hi]."""
+    nx = int(np.floor((hi[0] - lo[0]) / dx + 1e-9))
+    ny = int(np.floor((hi[1] - lo[1]) / dx + 1e-9))
+    xs = lo[0] + dx * (np.arange(nx) + 0.5)
+    ys = lo[1] + dx * (np.arange(ny) + 0.5)
+    X, Y = np.meshgrid(xs, ys)
+    return X.ravel(), Y.ravel()
+
+
+def fluid_points(region, dx):
+    if isinstance(region, BoxRegion):
+        return _lattice(region.min, region.max, dx)
+    pts = np.asarray(region.points, dtype=float)
+    lo = pts.min(axis=0)
+    x, y = _lattice(lo, pts.max(axis=0), dx)
+    inside = MplPath(pts).contains_points(np.column_stack([x, y]))
+    return x[inside], y[inside]
+
+
+def wall_points(region, dx):
+    if isinstance(region, BoxWalls):
+        L = region.layers * dx
+        (x0, y0), (x1, y1) = region.min, region.max
+        lo = (x0 - (0 if "left" in region.open else L), y0 - (0 if "bottom" in region.open else L))
+        hi = (x1 + (0 if "right" in region.open else L), y1 + (0 if "top" in region.open else L))
+        x, y = _lattice(lo, hi, dx)
+        inside = (x > x0) & (x < x1) & (y > y0) & (y < y1)
+        return x[~inside], y[~inside]
+    return polyline_points(np.asarray(region.points, float), dx, region.layers, region.side)
+
+
+def polyline_points(pts, dx, layers, side):
+    """Rows of wall particles behind each segment; ``side`` is where the solid lies."""
+    xs, ys = [], []
+    sgn = -1.0 if side == "right" else 1.0
+    for p0, p1 in zip(pts[:-1], pts[1:]):
+        seg = p1 - p0
+        length = float(np.hypot(*seg))
+        if length == 0:
+            continue
+        t = seg / length
+        nrm = sgn * np.array([-t[1], t[0]])      # unit normal pointing into the solid
+        n = max(1, int(round(length / dx)))
+        s = (np.arange(n) + 0.5) * (length / n)
+        for k in range(layers):
+            off = (k + 0.5) * dx
+            xs.append(p0[0] + s * t[0] + off * nrm[0])
+            ys.append(p0[1] + s * t[1] + off * nrm[1])
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    # drop near-duplicates where segments meet (inside corners)
+    keep = np.ones(x.size, bool)
+    for i, j in sorted(cKDTree(np.column_stack([x, y])).query_pairs(0.5 * dx)):
+        if keep[i]:
+            keep[j] = False
+    return x[keep], y[keep]
+
+
+def local_surface(xf, yf, dx):
+    """Free-surface height above each fluid particle: top of its lattice column + dx/2."""
+    col = np.floor((xf - xf.min()) / dx + 0.5).astype(np.int64)
+    top = np.full(col.max() + 1, -np.inf)
+    np.maximum.at(top, col, yf)
+    return top[col] + 0.5 * dx
+
+
+def generate(pd: ParticleDict, ctx, eos) -> ParticleState:
+    """Particles of a case at rest in hydrostatic equilibrium."""
+    dx = pd.dx
+    fx, fy = zip(*(fluid_points(r, dx) for r in pd.fluid.values()))
+    xf, yf = np.concatenate(fx), np.concatenate(fy)
+    if pd.walls:
+        wx, wy = zip(*(wall_points(r, dx) for r in pd.walls.values()))
+        xw, yw = np.concatenate(wx), np.concatenate(wy)
+    else:
+        xw = yw = np.zeros(0)
+    if xw.size and xf.size:
+        # fluid never overlaps walls: drop fluid particles closer than dx/2 to a wall particle
+        d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]))
+        xf, yf = xf[d >= 0.5 * dx], yf[d >= 0.5 * dx]
+    if xf.size == 0:
+        raise ValueError("system/particleDict: fluid regions produce no particles at this dx")
+    gmag = float(np.hypot(*ctx.g))
+    eta_f = local_surface(xf, yf, dx)
+    if xw.size:
+        _, nearest = cKDTree(np.column_stack([xf, yf])).query(np.column_stack([xw, yw]))
+        eta_w = eta_f[nearest]
+    else:
+        eta_w = np.zeros(0)
+    x = np.concatenate([xf, xw])
+    y = np.concatenate([yf, yw])
+    eta = np.concatenate([eta_f, eta_w])
+    p = ctx.rho0 * gmag * np.maximum(eta - y, 0.0)
+    rho = eos.density(p, ctx)
+    kind = np.concatenate([np.full(xf.size, FLUID), np.full(xw.size, WALL)])
+    zeros = np.zeros_like(x)
+    return ParticleState(x, y, zeros, zeros.copy(), rho, rho * dx * dx, kind)
+
+
+def default_domain(pd: ParticleDict):
+    """The box outside which particles are removed (see ``ParticleDict.domain``).
+
+    Computed from the geometry in particleDict alone, so a restart sees the same grid.
+    """
+    if pd.domain is not None:
+        return pd.domain.min, pd.domain.max
+    pts = []
+    for r in pd.fluid.values():
+        pts += [r.min, r.max] if isinstance(r, BoxRegion) else list(r.points)
+    for w in pd.walls.values():
+        L = w.layers * pd.dx
+        corners = [w.min, w.max] if isinstance(w, BoxWalls) else list(w.points)
+        pts += [(c[0] + sx * L, c[1] + sy * L) for c in corners for sx in (-1, 1) for sy in (-1, 1)]
+    pts = np.asarray(pts, float)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    margin = 10 * pd.dx
+    return (lo[0] - margin, lo[1] - margin), (hi[0] + margin, hi[1] + 0.5 * (hi[1] - lo[1]) + margin)
