@@ -302,6 +302,7 @@ class _Timer:
     def __init__(self):
         self.total = {}
         self.calls = {}
+        self.each = {}
 
     def wrap(self, name, fn):
         def wrapped(*a, **k):
@@ -310,6 +311,7 @@ class _Timer:
             dt = time.perf_counter() - t0
             self.total[name] = self.total.get(name, 0.0) + dt
             self.calls[name] = self.calls.get(name, 0) + 1
+            self.each.setdefault(name, []).append(dt)
             return r
         return wrapped
 
@@ -355,8 +357,11 @@ def stage_breakdown(sim, seconds, min_steps=5):
         else:
             t = tm.total.get(s, 0.0)
             calls = tm.calls.get(s, 0)
+        each = tm.each.get(s)
         out[s] = dict(ms_per_step=1e3 * t / nsteps, calls_per_step=calls / nsteps,
                       ms_per_call=1e3 * t / calls if calls else 0.0,
+                      ms_per_call_median=1e3 * sorted(each)[len(each) // 2] if each else
+                      1e3 * t / calls if calls else 0.0,
                       share=t / total if total else 0.0)
     return dict(steps=nsteps, ms_per_step=1e3 * total / nsteps, stages=out)
 
@@ -388,6 +393,8 @@ def bench_config(total, threads, args):
         **info, threads=threads, steps=steps, seconds=el,
         sim_time=sim.time, last_dt=sim.last_dt,
         ms_per_step=1e3 * el / steps, ms_per_step_median=1e3 * float(np.median(times)),
+        # cost of a step grows as the flow develops (more approaching pairs, see README)
+        drift=float(np.median(times[-max(1, steps // 4):]) / np.median(times[:max(1, steps // 4)])),
         particle_steps_per_s=n * steps / el,
         force_evaluations_per_step=fe,
         particle_force_evals_per_s=n * steps * fe / el,
@@ -477,6 +484,7 @@ THROUGHPUT_COLS = [
     ("pair interactions/s", lambda r: _si(r["pair_interactions_per_s"])),
     ("mean nbrs", lambda r: f"{r['mean_neighbours']:.1f}"),
     ("speedup", lambda r: f"{r.get('speedup', 1.0):.2f}"),
+    ("drift", lambda r: f"{r['drift']:.2f}"),
     ("launch (us)", lambda r: f"{r['parallel_launch_us']:.0f}"),
     ("cpu util", lambda r: f"{100 * r['cpu_utilisation']:.0f}%"),
     ("busy before", lambda r: f"{100 * r['machine_busy_before']:.0f}%"),
@@ -498,7 +506,8 @@ def stage_rows(r):
     rows = []
     for s, d in r["stage_breakdown"]["stages"].items():
         rows.append([s, f"{d['calls_per_step']:.0f}", f"{d['ms_per_call']:.3f}",
-                     f"{d['ms_per_step']:.3f}", f"{100 * d['share']:.1f}%"])
+                     f"{d['ms_per_call_median']:.3f}", f"{d['ms_per_step']:.3f}",
+                     f"{100 * d['share']:.1f}%"])
     return rows
 
 
@@ -538,7 +547,7 @@ def print_tables(results):
     for r in results["runs"]:
         show(f"Stages, N={r['n']:,}, {r['threads']} thread(s), "
              f"{r['stage_breakdown']['ms_per_step']:.2f} ms/step instrumented",
-             ["stage", "calls/step", "ms/call", "ms/step", "share"], stage_rows(r))
+             ["stage", "calls/step", "ms/call", "median ms/call", "ms/step", "share"], stage_rows(r))
 
 
 def write_markdown(results, path: Path):
@@ -588,7 +597,7 @@ def write_markdown(results, path: Path):
                   f"{r['ms_per_step']:.2f} ms/step plain; rates {r['ns_per_pair_rates']:.1f} "
                   f"ns/pair x thread, density_rate {r['ns_per_pair_density_rate']:.1f} "
                   "ns/pair x thread", "",
-                  markdown_table(["stage", "calls/step", "ms/call", "ms/step", "share"],
+                  markdown_table(["stage", "calls/step", "ms/call", "median ms/call", "ms/step", "share"],
                                  stage_rows(r)), ""]
     path.write_text("\n".join(lines))
 
@@ -704,7 +713,8 @@ def main(argv=None):
                       f"{_si(r['particle_steps_per_s'])} particle-steps/s, parallel launch "
                       f"{r['parallel_launch_us']:.0f} us, cpu util "
                       f"{100 * r['cpu_utilisation']:.0f}%", flush=True)
-                if r["parallel_launch_us"] > 500 or r["machine_busy_before"] > 0.15:
+                if (r["parallel_launch_us"] > 500 or r["machine_busy_before"] > 0.15
+                        or r["cpu_utilisation"] < 0.85):
                     print("  WARNING: the machine is shared (another process is using the "
                           "CPUs); timings, 2-thread ones above all, are not representative",
                           flush=True)

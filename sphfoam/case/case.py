@@ -175,7 +175,7 @@ class Case:
             try:
                 getattr(self, attr)
             except CaseError as e:
-                problems.extend(e.problems)
+                problems.extend(p for p in e.problems if str(p) not in map(str, problems))
         if problems:
             raise CaseError(problems)
         if not math.isfinite(self.context.c0) or self.context.c0 <= 0:

@@ -82,7 +82,7 @@ for cy in range(max(iy - 1, 0), min(iy + 2, ncy)):
             dx_ab = xa - x[b]
             dy_ab = ya - y[b]
             r2 = dx_ab * dx_ab + dy_ab * dy_ab
-            if r2 >= support2 or b == a:
+            if r2 >= support2 or r2 == 0.0:   # itself, or a coincident particle (grad W = 0)
                 continue
             q = math.sqrt(r2) * inv_h
             fw = kern_gw * kernel_dfdq_q(q)

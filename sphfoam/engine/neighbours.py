@@ -46,15 +46,18 @@ def counting_sort(cell, ncells, order, cell_start):
 
 
 @njit(parallel=True, **_JIT)
-def gather_f8(src, order, dst):
+def permute(order, f8, i8):
+    """Reorder the rows of a (k, n) float array and a (j, n) int array by ``order`` in one
+    parallel pass (one call per step instead of one per field)."""
+    out_f = np.empty_like(f8)
+    out_i = np.empty_like(i8)
     for i in prange(order.shape[0]):
-        dst[i] = src[order[i]]
-
-
-@njit(parallel=True, **_JIT)
-def gather_i8(src, order, dst):
-    for i in prange(order.shape[0]):
-        dst[i] = src[order[i]]
+        o = order[i]
+        for k in range(f8.shape[0]):
+            out_f[k, i] = f8[k, o]
+        for k in range(i8.shape[0]):
+            out_i[k, i] = i8[k, o]
+    return out_f, out_i
 
 
 class CellList:

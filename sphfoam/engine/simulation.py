@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphfoam.engine.neighbours import CellList, gather_f8, gather_i8
+from sphfoam.engine.neighbours import CellList, permute
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.timestep import stable_time_step
 
@@ -62,7 +62,7 @@ class Simulation:
             st.keep(~gone)
             cell = cell[~gone]
         order = self.cells.sort(cell)
-        st.apply(order, gather_f8, gather_i8)
+        st.apply(order, permute)
 
     def _grid_args(self):
         st, cl = self.state, self.cells

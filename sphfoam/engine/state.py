@@ -47,18 +47,15 @@ class ParticleState:
     def n_fluid(self) -> int:
         return int(np.count_nonzero(self.kind == FLUID))
 
-    def apply(self, order: np.ndarray, gather_f8, gather_i8):
-        """Reorder every persistent array by ``order`` (numba gathers, no Python loops)."""
-        for name in PERSISTENT_F8:
-            src = getattr(self, name)
-            dst = np.empty_like(src)
-            gather_f8(src, order, dst)
-            setattr(self, name, dst)
-        for name in PERSISTENT_I8:
-            src = getattr(self, name)
-            dst = np.empty_like(src)
-            gather_i8(src, order, dst)
-            setattr(self, name, dst)
+    def apply(self, order: np.ndarray, permute):
+        """Reorder every persistent array by ``order`` (one numba pass, no Python loops)."""
+        f8 = np.stack([getattr(self, n) for n in PERSISTENT_F8])
+        i8 = np.stack([getattr(self, n) for n in PERSISTENT_I8])
+        out_f, out_i = permute(order, f8, i8)
+        for k, name in enumerate(PERSISTENT_F8):
+            setattr(self, name, out_f[k])
+        for k, name in enumerate(PERSISTENT_I8):
+            setattr(self, name, out_i[k])
 
     def keep(self, mask: np.ndarray):
         """Drop the particles where ``mask`` is False."""

@@ -7,12 +7,12 @@ named hooks, plus the imports those lines need and the scalar coefficients they 
 Names a snippet may read inside the pair loop of particle ``a`` with neighbour ``b``::
 
     a, b                  particle indices
-    xa, ya, ua, va        position and velocity of a;   xb .. vb likewise for b
+    xa, ya, ua, va        position and velocity of a
     rhoa, pa, ca, rhob, pb, cb, mb, kindb
-    dx_ab, dy_ab, r2, r, q           r_ab = r_a - r_b, |r_ab|, q = |r_ab| / h
+    dx_ab, dy_ab, r2, q              r_ab = r_a - r_b, |r_ab|^2, q = |r_ab| / h (r2 > 0)
     u_ab, v_ab, vdotr                v_ab = v_a - v_b and v_ab . r_ab
     gWx, gWy                         grad_a W_ab
-    h, h2, eta2                      smoothing length, h^2, (0.1 h)^2 guard of T(3.32), T(3.38)
+    h, inv_h, eta2                   smoothing length, 1/h, (0.1 h)^2 guard of T(3.32), T(3.38)
 
 and accumulate into ``acc_x, acc_y`` (dv_a/dt), ``drho_a`` (drho_a/dt), ``sigma_a`` (T(3.89)).
 Every coefficient a model needs is declared in :meth:`params` with a name that starts with the
