@@ -298,6 +298,16 @@ def timed_steps(sim, seconds, min_steps=5):
     return times
 
 
+def best_chunk(times, chunk_seconds=0.5):
+    """Mean step time of the fastest run of consecutive steps lasting ~``chunk_seconds``."""
+    import numpy as np
+
+    t = np.asarray(times)
+    k = max(1, min(len(t), int(math.ceil(chunk_seconds / max(float(np.median(t)), 1e-12)))))
+    sums = np.convolve(t, np.ones(k), mode="valid")
+    return float(sums.min() / k)
+
+
 class _Timer:
     def __init__(self):
         self.total = {}
@@ -393,8 +403,11 @@ def bench_config(total, threads, args):
         **info, threads=threads, steps=steps, seconds=el,
         sim_time=sim.time, last_dt=sim.last_dt,
         ms_per_step=1e3 * el / steps, ms_per_step_median=1e3 * float(np.median(times)),
+        # fastest ~0.5 s chunk of the window: robust to intermittent load from other processes
+        ms_per_step_best=1e3 * best_chunk(times),
         # cost of a step grows as the flow develops (more approaching pairs, see README)
-        drift=float(np.median(times[-max(1, steps // 4):]) / np.median(times[:max(1, steps // 4)])),
+        drift=float(np.median(times[-max(1, steps // 4):])
+                    / np.median(times[:max(1, steps // 4)])),
         particle_steps_per_s=n * steps / el,
         force_evaluations_per_step=fe,
         particle_force_evals_per_s=n * steps * fe / el,
@@ -478,6 +491,7 @@ THROUGHPUT_COLS = [
     ("thr", lambda r: str(r["threads"])),
     ("steps", lambda r: str(r["steps"])),
     ("ms/step", lambda r: f"{r['ms_per_step']:.2f}"),
+    ("best ms/step", lambda r: f"{r['ms_per_step_best']:.2f}"),
     ("particle-steps/s", lambda r: _si(r["particle_steps_per_s"])),
     ("p-force-evals/s", lambda r: _si(r["particle_force_evals_per_s"])),
     ("per thread", lambda r: _si(r["particle_force_evals_per_s_per_thread"])),
@@ -573,7 +587,10 @@ def write_markdown(results, path: Path):
               "monaghan2007); pair interactions = ordered pairs a != b within the support "
               "x force evaluations (the density_rate pass, a third pair loop per step, "
               "is not counted; see JSON `pair_loop_visits_per_s`). speedup = vs the first "
-              "thread count. launch = median wall time of an empty numba prange region at "
+              "thread count. best ms/step = the fastest ~0.5 s run of consecutive steps "
+              "(less sensitive to other processes; every rate uses the whole window). "
+              "drift = median step time of the last quarter of the window / of the first "
+              "quarter (the pair loops get dearer as the flow develops). launch = median wall time of an empty numba prange region at "
               "that thread count (a few us on an idle machine; milliseconds when another "
               "process holds a core); cpu util = process CPU time / (wall x threads) in the "
               "timed window; busy before = all-CPU load just before the configuration.",

@@ -58,13 +58,17 @@ def _threads(n: Optional[int]):
         numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
 
 
-@app.callback()
-def main_callback(debug: bool = typer.Option(False, "--debug", help="show tracebacks"),
-                  version: bool = typer.Option(False, "--version", help="print the version")):
-    _state["debug"] = debug
-    if version:
+def _version(value: bool):
+    if value:
         console.print(f"sphfoam {__version__}")
         raise typer.Exit()
+
+
+@app.callback()
+def main_callback(debug: bool = typer.Option(False, "--debug", help="show tracebacks"),
+                  version: bool = typer.Option(False, "--version", callback=_version,
+                                               is_eager=True, help="print the version")):
+    _state["debug"] = debug
 
 
 @app.command()

@@ -188,8 +188,11 @@ def _run(case, c, log, progress, t_end) -> RunReport:
     t_write = next_write_time(sim.time) if c.writeControl != "timeStep" else math.inf
     bar = _Progress(progress, t0, t_end, state.n)
     wall0 = wallclock.perf_counter()
+    stop = _StopRequest()
     try:
         while sim.time < t_end - eps:
+            if stop.requested:
+                raise KeyboardInterrupt
             target = min(t_write, t_end) if c.writeControl == "adjustableRunTime" else t_end
             remaining = target - sim.time
             dt = sim.step(remaining)
@@ -216,10 +219,12 @@ def _run(case, c, log, progress, t_end) -> RunReport:
                 raise FloatingPointError(f"time step collapsed to {dt} at time {sim.time}")
             bar.update(sim, dt)
     except KeyboardInterrupt:
+        # Ctrl-C only raises a flag (see _StopRequest), so the state here is a whole step
         log(f"interrupted at time {sim.time:.6g}: writing the current state")
         written.append(_write(case, sim, log))
         raise
     finally:
+        stop.restore()
         bar.close()
         report.run_seconds = wallclock.perf_counter() - wall0
         report.end_time = sim.time
@@ -246,6 +251,31 @@ def _purge(written: list[Path], keep: int):
     if keep > 0:
         while len(written) > keep:
             shutil.rmtree(written.pop(0), ignore_errors=True)
+
+
+class _StopRequest:
+    """Ctrl-C sets a flag the time loop checks between steps, so a step is never cut in half
+    and the state written on interruption restarts exactly. A second Ctrl-C stops at once."""
+
+    def __init__(self):
+        import signal
+        import threading
+
+        self.requested = False
+        self._previous = None
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def restore(self):
+        import signal
+
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
 
 
 class _Progress:

@@ -97,3 +97,32 @@ def test_setup_refuses_to_overwrite_without_force(tutorial):
     res = runner.invoke(app, ["setup", str(case)])
     assert res.exit_code == 2 and "--force" in res.output
     assert runner.invoke(app, ["setup", str(case), "--force"]).exit_code == 0
+
+
+def test_ctrl_c_writes_a_whole_step_and_the_run_resumes(tutorial):
+    """SIGINT mid-run: the current state is written (never lost) and `run` continues from it."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    case = tutorial("damBreak", {"system/particleDict:dx": 0.0125,
+                                 "system/controlDict:writeInterval": 10.0,
+                                 "system/controlDict:endTime": 20.0,
+                                 "system/controlDict:functions": {}})
+    proc = subprocess.Popen([sys.executable, "-m", "sphfoam.cli", "run", str(case),
+                             "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    log = case / "log.sphfoam"
+    deadline = time.time() + 120
+    while time.time() < deadline and "compile:" not in (log.read_text() if log.exists() else ""):
+        time.sleep(0.2)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGINT)
+    out = proc.communicate(timeout=60)[0].decode()
+    assert proc.returncode == 130, out
+    assert "Traceback" not in out
+    times = [(t, p) for t, p in list_times(case) if t > 0]
+    assert len(times) == 1 and (times[0][1] / "uniform" / "time").is_file()
+    assert "interrupted at time" in log.read_text()
+    rep = run_case(case, progress=False, echo=None, end_time=times[0][0] + 0.002)
+    assert rep.start_time == pytest.approx(times[0][0], abs=1e-6) and rep.steps > 0

@@ -60,7 +60,8 @@ class ControlDict(Strict):
     startTime: float = 0.0
     stopAt: Literal["endTime"] = "endTime"
     endTime: float = Field(gt=0)
-    deltaT: float = Field(gt=0, description="first (or, with adjustTimeStep no, fixed) step")
+    deltaT: float = Field(gt=0, description="the fixed step with adjustTimeStep no; with adjustTimeStep yes "
+                          "the step comes from T(3.88)-(3.90) and deltaT is only recorded")
     adjustTimeStep: bool = True
     maxCo: float = Field(0.2, gt=0, le=2.0,
                          description="beta of the time-step conditions T(3.88), T(3.90)")
