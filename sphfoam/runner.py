@@ -18,6 +18,7 @@ from sphfoam import __version__, registry
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
+from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.case.times import list_times, time_name
 from sphfoam.engine.codegen import Selection, build_pipeline
 from sphfoam.engine.simulation import Simulation
@@ -114,21 +115,26 @@ def build_simulation(case: Case, state: ParticleState) -> Simulation:
     ctx = case.context
     sph = case.models.sph
     kernel = sph["kernel"]
-    sel = Selection(kernel, sph["equationOfState"], sph["continuity"], sph["momentum"],
-                    sph["viscosity"], sph["boundary"],
-                    adjust_time_step=case.control.adjustTimeStep)
+    domain = case.particles.domain
+    periodic = domain.periodic if domain is not None else []
+    sel = Selection(**{f: sph[f] for f in SPH_FAMILIES},
+                    adjust_time_step=case.control.adjustTimeStep,
+                    periodic_x="x" in periodic, periodic_y="y" in periodic)
     h = ctx.h
-    core = dict(h=h, inv_h=1.0 / h, support2=(kernel.support * h) ** 2, eta2=0.01 * h * h,
-                gx=ctx.g[0], gy=ctx.g[1])
-    pipe = build_pipeline(sel, ctx, core)
     lo, hi = default_domain(case.particles)
+    core = dict(h=h, inv_h=1.0 / h, support2=(kernel.support * h) ** 2, eta2=0.01 * h * h,
+                gx=ctx.g[0], gy=ctx.g[1], lx=hi[0] - lo[0], ly=hi[1] - lo[1])
+    pipe = build_pipeline(sel, ctx, core)
     c = case.control
+    filt = sph["densityFilter"]
     return Simulation(state, pipe, case.models.integrator, h=h, support=kernel.support,
                       domain_lo=lo, domain_hi=hi, beta=c.maxCo,
                       force_condition=case.schemes.timeStepControl.forceCondition,
                       adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
                       max_delta_t=c.maxDeltaT,
-                      cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor)
+                      cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
+                      filter_every=getattr(filt.coeffs, "every", 0),
+                      dt_limit=min(m.dt_limit(ctx) for m in sel.models()))
 
 
 def run_case(case: Case | str | Path, *, progress: bool = True, echo=print,

@@ -169,7 +169,9 @@ class BoxWalls(Strict):
     type: Literal["box"]
     min: Vector2
     max: Vector2
-    layers: int = Field(3, ge=1, le=10)
+    layers: int = Field(3, ge=1, le=10, description="rows of wall particles")
+    velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s), e.g. "
+                              "the sliding plate of a Couette flow")
     open: list[Literal["top", "bottom", "left", "right"]] = Field(default_factory=lambda: ["top"])
 
     @field_validator("open", mode="before")
@@ -183,8 +185,10 @@ class PolylineWalls(Strict):
 
     type: Literal["polyline"]
     points: list[Vector2] = Field(min_length=2)
-    layers: int = Field(3, ge=1, le=10)
-    side: Literal["left", "right"] = "right"
+    layers: int = Field(3, ge=1, le=10, description="rows of wall particles")
+    side: Literal["left", "right"] = Field("right", description="side of the direction of "
+                                           "travel the solid lies on")
+    velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
 
 
 WallRegion = Annotated[BoxWalls | PolylineWalls, Field(discriminator="type")]
@@ -193,6 +197,14 @@ WallRegion = Annotated[BoxWalls | PolylineWalls, Field(discriminator="type")]
 class Domain(Strict):
     min: Vector2
     max: Vector2
+    periodic: list[Literal["x", "y"]] = Field(default_factory=list, description=(
+        "periodic axes: a particle leaving through max re-enters through min, and pairs "
+        "interact across the seam (channel flows)"))
+
+    @field_validator("periodic", mode="before")
+    @classmethod
+    def _one(cls, v):
+        return [v] if isinstance(v, str) else v
 
 
 class ParticleDict(Strict):

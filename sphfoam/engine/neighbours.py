@@ -15,11 +15,18 @@ _JIT = dict(cache=True, fastmath=True)
 
 
 @njit(**_JIT)
-def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell):
-    """Cell index of every particle; -1 marks a particle outside the domain box."""
+def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
+    """Cell index of every particle; -1 marks a particle outside the domain box.
+
+    ``lx`` (``ly``) > 0 makes the axis periodic: positions are wrapped into the box first.
+    """
     n = x.shape[0]
     outside = 0
     for a in range(n):
+        if lx > 0.0:
+            x[a] = x0 + (x[a] - x0) % lx
+        if ly > 0.0:
+            y[a] = y0 + (y[a] - y0) % ly
         ix = int(np.floor((x[a] - x0) * inv_cell))
         iy = int(np.floor((y[a] - y0) * inv_cell))
         if ix < 0 or iy < 0 or ix >= ncx or iy >= ncy or not (np.isfinite(x[a]) and np.isfinite(y[a])):
@@ -61,13 +68,28 @@ def permute(order, f8, i8):
 
 
 class CellList:
-    """A fixed grid over the domain box; rebuilt (re-sorted) once per step."""
+    """A fixed grid over the domain box; rebuilt (re-sorted) once per step.
 
-    def __init__(self, lo, hi, cell_size):
+    On a periodic axis the cells tile the period exactly (their side is the period divided
+    by a whole number >= 3, and no smaller than ``cell_size``).
+    """
+
+    def __init__(self, lo, hi, cell_size, periodic_x=False, periodic_y=False):
         self.x0, self.y0 = float(lo[0]), float(lo[1])
+        self.lx = float(hi[0] - lo[0]) if periodic_x else 0.0
+        self.ly = float(hi[1] - lo[1]) if periodic_y else 0.0
+        period = self.lx or self.ly
+        if period:
+            n = int(np.floor(period / cell_size))
+            if n < 3:
+                raise ValueError(f"periodic length {period:g} must be at least 3 kernel supports "
+                                 f"({3 * cell_size:g})")
+            cell_size = period / n
+            if self.lx and self.ly and abs(self.ly / cell_size - round(self.ly / cell_size)) > 1e-9:
+                raise ValueError("with both axes periodic, the lengths must share a cell size")
         self.cell_size = float(cell_size)
-        self.ncx = max(1, int(np.ceil((hi[0] - lo[0]) / cell_size)))
-        self.ncy = max(1, int(np.ceil((hi[1] - lo[1]) / cell_size)))
+        self.ncx = max(1, int(np.ceil((hi[0] - lo[0]) / cell_size - 1e-9)))
+        self.ncy = max(1, int(np.ceil((hi[1] - lo[1]) / cell_size - 1e-9)))
         if self.ncx * self.ncy > 200_000_000:
             raise ValueError("domain box too large for the cell grid "
                              f"({self.ncx} x {self.ncy} cells); give a smaller domain")
@@ -77,7 +99,7 @@ class CellList:
     def bin(self, x, y):
         cell = np.empty(x.shape[0], dtype=np.int64)
         outside = bin_particles(x, y, self.x0, self.y0, 1.0 / self.cell_size,
-                                self.ncx, self.ncy, cell)
+                                self.ncx, self.ncy, cell, self.lx, self.ly)
         return cell, outside
 
     def sort(self, cell):

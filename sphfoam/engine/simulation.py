@@ -29,7 +29,8 @@ class Simulation:
     def __init__(self, state: ParticleState, pipeline, integrator, *, h: float, support: float,
                  domain_lo, domain_hi, beta: float, force_condition: bool,
                  adjust_time_step: bool, delta_t: float, max_delta_t: float = math.inf,
-                 cell_size_factor: float = 1.05):
+                 cell_size_factor: float = 1.05, filter_every: int = 0,
+                 dt_limit: float = math.inf):
         self.state = state
         self.pipeline = pipeline
         self.prm = pipeline.prm
@@ -40,11 +41,21 @@ class Simulation:
         self.adjust_time_step = bool(adjust_time_step)
         self.delta_t = float(delta_t)
         self.max_delta_t = float(max_delta_t)
-        self.cells = CellList(domain_lo, domain_hi, support * h * cell_size_factor)
+        sel = pipeline.selection
+        if cell_size_factor < 1.0:
+            raise ValueError("cellSizeFactor must be >= 1 (cells smaller than the support miss "
+                             "neighbours)")
+        if abs(support ** 2 * h ** 2 - self.prm[2]) > 1e-9 * self.prm[2]:
+            raise ValueError("kernel support does not match the pipeline's")
+        self.cells = CellList(domain_lo, domain_hi, support * h * cell_size_factor,
+                              sel.periodic_x, sel.periodic_y)
+        self.filter_every = int(filter_every) if pipeline.density_filter is not None else 0
+        self.model_dt_limit = float(dt_limit)
         self.time = 0.0
         self.step_index = 0
         self.last_dt = float(delta_t)
         self.removals: list[Removal] = []
+        self.aux = np.zeros((pipeline.n_aux, state.n))
         self.on_removal = None
 
     # --- stages --------------------------------------------------------------------------
@@ -66,8 +77,24 @@ class Simulation:
 
     def _grid_args(self):
         st, cl = self.state, self.cells
+        if self.aux.shape[1] != st.n:
+            self.aux = np.zeros((self.pipeline.n_aux, st.n))
         return (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, cl.cell_start,
-                cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy, self.prm)
+                cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy, self.prm, self.aux)
+
+    def _prepass(self, args):
+        if self.pipeline.prepass is not None:
+            self.pipeline.prepass(*args)
+
+    def filter_density(self):
+        """Run the density filter's pass (T(3.64)-(3.69)); the caller decides when."""
+        st = self.state
+        self.eos()
+        args = self._grid_args()
+        self._prepass(args)
+        out = np.empty_like(st.rho)
+        self.pipeline.density_filter(*args, out)
+        st.rho = out
 
     def eos(self):
         st = self.state
@@ -75,10 +102,14 @@ class Simulation:
 
     def rates(self):
         st = self.state
-        self.pipeline.rates(*self._grid_args(), st.ax, st.ay, st.drho, st.sigma)
+        args = self._grid_args()
+        self._prepass(args)
+        self.pipeline.rates(*args, st.ax, st.ay, st.drho, st.sigma)
 
     def density_rate(self):
-        self.pipeline.density_rate(*self._grid_args(), self.state.drho)
+        args = self._grid_args()
+        self._prepass(args)
+        self.pipeline.density_rate(*args, self.state.drho)
 
     def time_step(self) -> float:
         if not self.adjust_time_step:
@@ -86,10 +117,14 @@ class Simulation:
         st = self.state
         dt = stable_time_step(self.h, st.c, st.sigma, st.ax, st.ay, st.kind, self.beta,
                               self.force_condition)
-        return min(dt, self.max_delta_t)
+        return min(dt, self.max_delta_t, self.model_dt_limit)
 
     # --- stepping ------------------------------------------------------------------------
     def step(self, dt_remaining: float = math.inf) -> float:
+        """Re-sort, filter the density when due, then one step of the integrator."""
+        self.neighbour_update()
+        if self.filter_every and self.step_index > 0 and self.step_index % self.filter_every == 0:
+            self.filter_density()
         dt = self.integrator.step(self, dt_remaining)
         self.time += dt
         self.step_index += 1

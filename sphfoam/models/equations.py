@@ -17,14 +17,14 @@ class Continuity(PipelineModel):
 class DifferenceForm(Continuity):
     name = "differenceForm"
     doc = "drho_a/dt = sum_b m_b v_ab . grad_a W_ab, T(3.18)"
-    pair_code = "drho_a += mb * (u_ab * gWx + v_ab * gWy)"
+    pair_code = "drho_a += mb * (uc_ab * gWx + vc_ab * gWy)"
 
 
 @register
 class DensityWeighted(Continuity):
     name = "densityWeighted"
     doc = "drho_a/dt = rho_a sum_b (m_b / rho_b) v_ab . grad_a W_ab, T(3.17)"
-    pair_code = "drho_a += rhoa * mb / rhob * (u_ab * gWx + v_ab * gWy)"
+    pair_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
 
 
 class Momentum(PipelineModel):

@@ -12,13 +12,13 @@ _JIT = dict(cache=True, fastmath=True, parallel=True)
 
 @njit(**_JIT)
 def _monaghan_half(x, y, u, v, rho, ax, ay, drho, kind, dt0, u_half, v_half):
-    """T(3.91)-(3.93): r, v, rho to mid-step (walls keep position and velocity)."""
+    """T(3.91)-(3.93): r, v, rho to mid-step (walls keep their velocity and move with it)."""
     hdt = 0.5 * dt0
     for a in prange(x.shape[0]):
         rho[a] += hdt * drho[a]
+        x[a] += hdt * u[a]          # wall particles move with their prescribed velocity
+        y[a] += hdt * v[a]
         if kind[a] == 0:
-            x[a] += hdt * u[a]
-            y[a] += hdt * v[a]
             u[a] += hdt * ax[a]
             v[a] += hdt * ay[a]
         u_half[a] = u[a]
@@ -29,9 +29,9 @@ def _monaghan_half(x, y, u, v, rho, ax, ay, drho, kind, dt0, u_half, v_half):
 def _monaghan_full(x, y, u, v, ax, ay, kind, dt0, dt1, u_half, v_half):
     """T(3.94)-(3.95): v^1 = v^1/2 + (dt0 + dt1)/2 F^1/2;  r^1 = r^1/2 + dt1/2 v^1/2."""
     for a in prange(x.shape[0]):
+        x[a] += 0.5 * dt1 * u_half[a]
+        y[a] += 0.5 * dt1 * v_half[a]
         if kind[a] == 0:
-            x[a] += 0.5 * dt1 * u_half[a]
-            y[a] += 0.5 * dt1 * v_half[a]
             u[a] += 0.5 * (dt0 + dt1) * ax[a]
             v[a] += 0.5 * (dt0 + dt1) * ay[a]
 
@@ -61,7 +61,6 @@ class Monaghan2007(Model):
     def step(self, sim, dt_remaining: float) -> float:
         """Advance ``sim`` by one step of at most ``dt_remaining``; return the time advanced."""
         st = sim.state
-        sim.neighbour_update()
         sim.eos()
         sim.rates()                               # F^0, D^0
         dt0 = min(sim.time_step(), dt_remaining)

@@ -92,8 +92,10 @@ def generate(pd: ParticleDict, ctx, eos) -> ParticleState:
     if pd.walls:
         wx, wy = zip(*(wall_points(r, dx) for r in pd.walls.values()))
         xw, yw = np.concatenate(wx), np.concatenate(wy)
+        uw = np.concatenate([np.full(len(a), r.velocity[0]) for a, r in zip(wx, pd.walls.values())])
+        vw = np.concatenate([np.full(len(a), r.velocity[1]) for a, r in zip(wx, pd.walls.values())])
     else:
-        xw = yw = np.zeros(0)
+        xw = yw = uw = vw = np.zeros(0)
     if xw.size and xf.size:
         # fluid never overlaps walls: drop fluid particles closer than dx/2 to a wall particle
         d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]))
@@ -113,8 +115,9 @@ def generate(pd: ParticleDict, ctx, eos) -> ParticleState:
     p = ctx.rho0 * gmag * np.maximum(eta - y, 0.0)
     rho = eos.density(p, ctx)
     kind = np.concatenate([np.full(xf.size, FLUID), np.full(xw.size, WALL)])
-    zeros = np.zeros_like(x)
-    return ParticleState(x, y, zeros, zeros.copy(), rho, rho * dx * dx, kind)
+    u = np.concatenate([np.zeros(xf.size), uw])
+    v = np.concatenate([np.zeros(xf.size), vw])
+    return ParticleState(x, y, u, v, rho, rho * dx * dx, kind)
 
 
 def default_domain(pd: ParticleDict):
