@@ -9,10 +9,20 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit, prange
 
 from sphfoam.engine.neighbours import CellList, permute
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.timestep import stable_time_step
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def add_correction(u, du, kind):
+    """u + du for fluid particles (walls keep their prescribed velocity)."""
+    out = np.empty_like(u)
+    for a in prange(u.shape[0]):
+        out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
+    return out
 
 
 @dataclass
@@ -85,6 +95,17 @@ class Simulation:
     def _prepass(self, args):
         if self.pipeline.prepass is not None:
             self.pipeline.prepass(*args)
+
+    def position_velocity(self, u, v):
+        """The velocity positions are advanced with: (u, v) itself, or with a velocity
+        correction selected (XSPH, T(3.62)), u + du and v + dv from the last pre-pass."""
+        vc = self.pipeline.selection.velocityCorrection
+        if vc is None or not getattr(vc, "advects_positions", False):
+            return u, v
+        aux_names = self.pipeline.module.AUX
+        du = self.aux[aux_names.index(vc.aux[0])]
+        dv = self.aux[aux_names.index(vc.aux[1])]
+        return add_correction(u, du, self.state.kind), add_correction(v, dv, self.state.kind)
 
     def filter_density(self):
         """Run the density filter's pass (T(3.64)-(3.69)); the caller decides when."""

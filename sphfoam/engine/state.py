@@ -18,8 +18,12 @@ SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma", "u_half", "v_half")
 class ParticleState:
     """Positions, velocities, density, mass, kind and original id of every particle."""
 
-    def __init__(self, x, y, u, v, rho, m, kind, id=None):
+    def __init__(self, x, y, u, v, rho, m, kind, id=None, extra=None):
         n = len(x)
+        #: further persistent float fields (e.g. an integrator's previous step), permuted,
+        #: written to and read from time directories like the others
+        self.extra: dict[str, np.ndarray] = {
+            k: np.ascontiguousarray(a, dtype=np.float64) for k, a in (extra or {}).items()}
         self.x = np.ascontiguousarray(x, dtype=np.float64)
         self.y = np.ascontiguousarray(y, dtype=np.float64)
         self.u = np.ascontiguousarray(u, dtype=np.float64)
@@ -49,9 +53,12 @@ class ParticleState:
 
     def apply(self, order: np.ndarray, permute):
         """Reorder every persistent array by ``order`` (one numba pass, no Python loops)."""
-        f8 = np.stack([getattr(self, n) for n in PERSISTENT_F8])
+        extra = list(self.extra)
+        f8 = np.stack([getattr(self, n) for n in PERSISTENT_F8] + [self.extra[k] for k in extra])
         i8 = np.stack([getattr(self, n) for n in PERSISTENT_I8])
         out_f, out_i = permute(order, f8, i8)
+        for k, name in enumerate(extra):
+            self.extra[name] = out_f[len(PERSISTENT_F8) + k]
         for k, name in enumerate(PERSISTENT_F8):
             setattr(self, name, out_f[k])
         for k, name in enumerate(PERSISTENT_I8):
@@ -61,6 +68,8 @@ class ParticleState:
         """Drop the particles where ``mask`` is False."""
         for name in PERSISTENT_F8 + PERSISTENT_I8:
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
+        for name in self.extra:
+            self.extra[name] = np.ascontiguousarray(self.extra[name][mask])
         self._alloc_scratch()
 
     # --- time-directory fields -----------------------------------------------------------
@@ -75,6 +84,8 @@ class ParticleState:
         }
         if p is not None:
             out["p"] = np.asarray(p, dtype=np.float64).copy()
+        for k, a in self.extra.items():
+            out[k] = a.copy()
         return out
 
     @classmethod
@@ -83,5 +94,8 @@ class ParticleState:
         if missing:
             raise KeyError(f"missing particle field(s): {', '.join(missing)}")
         pos, vel = f["positions"], f["U"]
+        known = {"positions", "U", "rho", "mass", "type", "origId", "p"}
+        extra = {k: a for k, a in f.items() if k not in known and a.ndim == 1
+                 and a.dtype.kind == "f"}
         return cls(pos[:, 0], pos[:, 1], vel[:, 0], vel[:, 1], f["rho"], f["mass"], f["type"],
-                   f.get("origId"))
+                   f.get("origId"), extra)

@@ -11,13 +11,14 @@ _JIT = dict(cache=True, fastmath=True, parallel=True)
 
 
 @njit(**_JIT)
-def _monaghan_half(x, y, u, v, rho, ax, ay, drho, kind, dt0, u_half, v_half):
-    """T(3.91)-(3.93): r, v, rho to mid-step (walls keep their velocity and move with it)."""
+def _monaghan_half(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt0, u_half, v_half):
+    """T(3.91)-(3.93): r, v, rho to mid-step (walls keep their velocity and move with it).
+    ``pu, pv`` is the velocity positions move with (u, v, or XSPH-corrected)."""
     hdt = 0.5 * dt0
     for a in prange(x.shape[0]):
         rho[a] += hdt * drho[a]
-        x[a] += hdt * u[a]          # wall particles move with their prescribed velocity
-        y[a] += hdt * v[a]
+        x[a] += hdt * pu[a]         # wall particles move with their prescribed velocity
+        y[a] += hdt * pv[a]
         if kind[a] == 0:
             u[a] += hdt * ax[a]
             v[a] += hdt * ay[a]
@@ -26,11 +27,11 @@ def _monaghan_half(x, y, u, v, rho, ax, ay, drho, kind, dt0, u_half, v_half):
 
 
 @njit(**_JIT)
-def _monaghan_full(x, y, u, v, ax, ay, kind, dt0, dt1, u_half, v_half):
+def _monaghan_full(x, y, u, v, ax, ay, kind, dt0, dt1, pu_half, pv_half):
     """T(3.94)-(3.95): v^1 = v^1/2 + (dt0 + dt1)/2 F^1/2;  r^1 = r^1/2 + dt1/2 v^1/2."""
     for a in prange(x.shape[0]):
-        x[a] += 0.5 * dt1 * u_half[a]
-        y[a] += 0.5 * dt1 * v_half[a]
+        x[a] += 0.5 * dt1 * pu_half[a]
+        y[a] += 0.5 * dt1 * pv_half[a]
         if kind[a] == 0:
             u[a] += 0.5 * (dt0 + dt1) * ax[a]
             v[a] += 0.5 * (dt0 + dt1) * ay[a]
@@ -64,8 +65,9 @@ class Monaghan2007(Model):
         sim.eos()
         sim.rates()                               # F^0, D^0
         dt0 = min(sim.time_step(), dt_remaining)
-        _monaghan_half(st.x, st.y, st.u, st.v, st.rho, st.ax, st.ay, st.drho, st.kind, dt0,
-                       st.u_half, st.v_half)
+        pu, pv = sim.position_velocity(st.u, st.v)
+        _monaghan_half(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho, st.kind,
+                       dt0, st.u_half, st.v_half)
         sim.eos()
         sim.rates()                               # F^1/2
         dth = sim.time_step()
@@ -74,8 +76,8 @@ class Monaghan2007(Model):
         else:
             dt1 = dt0
         dt1 = min(dt1, 2.0 * dt_remaining - dt0)   # land exactly on the next write time
-        _monaghan_full(st.x, st.y, st.u, st.v, st.ax, st.ay, st.kind, dt0, dt1,
-                       st.u_half, st.v_half)
+        pu, pv = sim.position_velocity(st.u_half, st.v_half)
+        _monaghan_full(st.x, st.y, st.u, st.v, st.ax, st.ay, st.kind, dt0, dt1, pu, pv)
         # rho^1/2 + dt1/2 D^1 with D^1 from r^1, v^1 (T(3.96))
         sim.density_rate()
         _density_update(st.rho, st.drho, 0.5 * dt1)
