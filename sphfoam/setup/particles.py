@@ -70,9 +70,8 @@ def polyline_points(pts, dx, layers, side):
     x, y = np.concatenate(xs), np.concatenate(ys)
     # drop near-duplicates where segments meet (inside corners)
     keep = np.ones(x.size, bool)
-    for i, j in sorted(cKDTree(np.column_stack([x, y])).query_pairs(0.5 * dx)):
-        if keep[i]:
-            keep[j] = False
+    pairs = cKDTree(np.column_stack([x, y])).query_pairs(0.5 * dx, output_type="ndarray")
+    keep[pairs[:, 1]] = False          # i < j in every pair: keep the first of each
     return x[keep], y[keep]
 
 
