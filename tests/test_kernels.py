@@ -30,6 +30,7 @@ KNOTS = {
     "quartic": (0.5, 1.5, 2.5),
     "quintic": (1.0, 2.0, 3.0),
     "wendlandC2": (2.0,),
+    "gaussian": (3.0,),          # W continuous at Q = 3, its slope jumps there
 }
 
 
@@ -122,7 +123,8 @@ def test_dfdq_q_finite_at_origin(kernel):
 
 def test_dfdq_q_values_at_origin_by_hand():
     # f''(0) of each piece-wise polynomial, differentiated by hand from T(3.5)-(3.7)
-    expected = {"cubicSpline": -2.0, "quartic": -30.0, "quintic": -120.0, "wendlandC2": -5.0}
+    expected = {"cubicSpline": -2.0, "quartic": -30.0, "quintic": -120.0, "wendlandC2": -5.0,
+                "gaussian": -2.0}
     for name, val in expected.items():
         assert _kernel(name).dfdq_q(0.0) == pytest.approx(val, rel=1e-14)
 
@@ -235,11 +237,19 @@ HAND_VALUES = {
                 2.5: 0.5**5},
     # Wendland C2 in 2-D: (1 - q/2)^4 (2q + 1)
     "wendlandC2": {0.0: 1.0, 1.0: 0.5**4 * 3.0, 0.5: 0.75**4 * 2.0, 1.5: 0.25**4 * 4.0},
+    # P(26): exp(-q^2) - exp(-Q^2), Q = 3
+    "gaussian": {0.0: 1.0 - math.exp(-9.0), 0.5: math.exp(-0.25) - math.exp(-9.0),
+                 1.0: math.exp(-1.0) - math.exp(-9.0), 2.0: math.exp(-4.0) - math.exp(-9.0),
+                 2.9: math.exp(-8.41) - math.exp(-9.0)},
 }
 
 ALPHA_2D = {"cubicSpline": 15.0 / (7.0 * math.pi), "quartic": 96.0 / (1199.0 * math.pi),
-            "quintic": 7.0 / (478.0 * math.pi), "wendlandC2": 7.0 / (4.0 * math.pi)}
-SUPPORT = {"cubicSpline": 2.0, "quartic": 2.5, "quintic": 3.0, "wendlandC2": 2.0}
+            "quintic": 7.0 / (478.0 * math.pi), "wendlandC2": 7.0 / (4.0 * math.pi),
+            # P(28) integrated by hand: C = 1 / (pi (1 - 10 exp(-9))) = 1.00123562292 / pi
+            # (the paper prints 1.0012356234 / pi, 5e-10 off)
+            "gaussian": 1.0 / (math.pi * (1.0 - 10.0 * math.exp(-9.0)))}
+SUPPORT = {"cubicSpline": 2.0, "quartic": 2.5, "quintic": 3.0, "wendlandC2": 2.0,
+           "gaussian": 3.0}
 
 
 @pytest.mark.parametrize("name", sorted(HAND_VALUES))

@@ -60,11 +60,11 @@ def test_hydrostatic_tank_stays_at_rest(tutorial):
     x, y = s["positions"].T
     first_row = (s["type"] == 1) & (y > -0.01) & (y < 0) & (x > 0) & (x < W)
     assert s["p"][first_row].mean() == pytest.approx(RHO0 * G * H, rel=0.02)
-    # inside the fluid the continuity density drifts upward without a density filter
-    # (measured +4 % in the bottom fluid row at 1.5 s); guard against it getting worse
+    # inside the fluid: the bottom row (measured +1.3 % at 1.5 s with the quartic kernel;
+    # Wendland C2 at h = 1.3 dx, whose lattice gradient is 2.6 % low, gives +3 to +4 %)
     f = s["type"] == 0
     bottom = f & (y < 0.01)
-    assert s["p"][bottom].mean() == pytest.approx(RHO0 * G * (H - 0.005), rel=0.06)
+    assert s["p"][bottom].mean() == pytest.approx(RHO0 * G * (H - 0.005), rel=0.03)
     # the lattice settles into its SPH equilibrium (KE peaks near 0.75 s), then KE decays
     peak = int(np.argmax(kes))
     assert peak < len(kes) - 1 and kes[-1] < 0.5 * kes[peak]
@@ -78,7 +78,7 @@ def test_dam_break_follows_martin_moyce(tutorial):
                                  "system/controlDict:endTime": 0.35,
                                  "system/controlDict:writeInterval": 0.35,
                                  "system/controlDict:functions.front.plot": "no",
-                                 "system/controlDict:functions.front.heightBand": [0.02, 0.04]})
+                                 "system/controlDict:functions.front.heightBand": [0.03, 0.05]})
     run_case(case, progress=False, echo=None)
     dat = case / "postProcessing" / "front" / "0" / "front.dat"
     rows = np.loadtxt(dat)
@@ -87,8 +87,10 @@ def test_dam_break_follows_martin_moyce(tutorial):
     assert np.all(np.diff(Z) >= -1e-9), "front moved backwards"
     front, height = martin_moyce()
     sel = (T > 0.8) & (T < 2.2)
-    # tolerance: the release time of the experiment is uncertain by ~0.1 in T
+    # measured at H0/dx = 40: front within 5 %, height within 7 % over 0.5 < T < 2.5;
+    # at this test's H0/dx = 25: front 8 %, height 11.6 %. The release time of the
+    # experiment is itself uncertain by ~0.1 in T.
     zf = np.interp(T[sel], front[:, 0], front[:, 1])
-    assert np.max(np.abs(Z[sel] - zf) / zf) < 0.15
+    assert np.max(np.abs(Z[sel] - zf) / zf) < 0.10
     hh = np.interp(T[sel], height[:, 0], height[:, 1])
-    assert np.max(np.abs(Hn[sel] - hh) / hh) < 0.12
+    assert np.max(np.abs(Hn[sel] - hh) / hh) < 0.15

@@ -1,13 +1,17 @@
 """Built-in models; importing this package registers them all."""
 
 import sphfoam.sampling.damBreak  # noqa: F401  (function objects)
+import sphfoam.sampling.profiles  # noqa: F401
 
 from sphfoam.models import (  # noqa: F401
     boundaries,
+    corrections,
     eos,
     equations,
+    filters,
     integrators,
     kernels,
     noop,
+    turbulence,
     viscosity,
 )

@@ -84,6 +84,26 @@ def wendland_c2_dfdq_q(q):
     return -5.0 * t**3
 
 
+# --- finite-support Gaussian, Colagrossi & Landrini (2003), P(26)-(28), support 3h ----------
+#: exp(-Q^2) for Q = R / h = 3, the value the Gaussian is lowered by so that it vanishes at R
+GAUSSIAN_Q = 3.0
+GAUSSIAN_EXP_Q2 = math.exp(-GAUSSIAN_Q * GAUSSIAN_Q)
+
+
+@njit(**_JIT)
+def gaussian_f(q):
+    if q >= GAUSSIAN_Q:
+        return 0.0
+    return math.exp(-q * q) - GAUSSIAN_EXP_Q2
+
+
+@njit(**_JIT)
+def gaussian_dfdq_q(q):
+    if q >= GAUSSIAN_Q:
+        return 0.0
+    return -2.0 * math.exp(-q * q)
+
+
 class Kernel(PipelineModel):
     """A compactly supported kernel; subclasses name their jitted ``f`` and ``dfdq_q``."""
 
@@ -144,6 +164,23 @@ class Quintic(Kernel):
     support = 3.0
     alpha_2d = 7.0 / (478.0 * math.pi)
     f_name, dfdq_q_name = "quintic_f", "quintic_dfdq_q"
+
+
+@register
+class Gaussian(Kernel):
+    """Finite-support Gaussian of Colagrossi & Landrini (2003), P(26)-(28).
+
+    W = C / h^2 [exp(-q^2) - exp(-Q^2)] for q < Q = R / h = 3, 0 beyond; the shift makes W
+    continuous (not its slope, -2 Q exp(-Q^2) ~ -7e-4 at q = Q).  P(28) normalises it:
+    C = 1 / (2 pi int_0^Q [exp(-q^2) - exp(-Q^2)] q dq) = 1 / (pi (1 - (1 + Q^2) exp(-Q^2))),
+    = 1.0012356234 / pi for Q = 3 as the paper states.
+    """
+
+    name = "gaussian"
+    doc = "finite-support Gaussian, Colagrossi & Landrini (2003), P(26)-(28); support 3h"
+    support = GAUSSIAN_Q
+    alpha_2d = 1.0 / (math.pi * (1.0 - (1.0 + GAUSSIAN_Q**2) * GAUSSIAN_EXP_Q2))
+    f_name, dfdq_q_name = "gaussian_f", "gaussian_dfdq_q"
 
 
 @register

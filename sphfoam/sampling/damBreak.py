@@ -12,23 +12,21 @@ from sphfoam.engine.state import FLUID
 from sphfoam.registry import register
 from sphfoam.sampling.base import FunctionObject, FunctionObjectCoeffs
 
-#: Martin & Moyce (1952), square column (n^2 = 1), as digitised in the SPH/MPS literature
-#: (Koshizuka & Oka 1996 convention): front Z = z/a against t sqrt(2 g / a) ...
+#: Martin & Moyce (1952), square column (n^2 = 1, a = H0), as digitised in the SPH
+#: literature on the axes T = t sqrt(g/a): front Z = z/a ...
 MM_FRONT = np.array([
     [0.43, 1.11], [0.62, 1.22], [0.80, 1.44], [0.97, 1.67], [1.14, 1.89], [1.29, 2.11],
     [1.45, 2.33], [1.62, 2.56], [1.76, 2.78], [1.93, 3.00], [2.07, 3.22], [2.24, 3.44],
     [2.40, 3.67], [2.54, 3.89], [2.71, 4.11], [2.87, 4.33], [3.04, 4.56], [3.21, 4.78],
     [3.29, 4.89], [3.32, 5.00]])
-#: ... and residual height H = h/a against t sqrt(g / a)
+#: ... and residual height H = h/a
 MM_HEIGHT = np.array([[0.0, 1.0], [0.80, 0.89], [1.29, 0.78], [1.74, 0.67], [2.15, 0.56],
                       [2.57, 0.44], [3.08, 0.33], [4.27, 0.22], [6.29, 0.11]])
 
 
 def martin_moyce():
-    """Both series on the thesis's axes T = t sqrt(g/H0), T(3.81) (a = H0 for n = 1)."""
-    front = MM_FRONT.copy()
-    front[:, 0] /= math.sqrt(2.0)
-    return front, MM_HEIGHT.copy()
+    """Front and height series on the thesis's axes T = t sqrt(g/H0), T(3.81)."""
+    return MM_FRONT.copy(), MM_HEIGHT.copy()
 
 
 @register
@@ -37,7 +35,8 @@ class DamBreakFront(FunctionObject):
 
     x_front is the largest x of any fluid particle; h is the highest fluid particle within
     ``heightBand`` of the back wall (the thesis measures "a small distance away from the
-    wall"), plus dx/2 so that h = H0 at rest.
+    wall": with stationary ghosts a film of water stays on the wall itself, T Fig 3.20),
+    plus dx/2 so that h = H0 at rest.
     """
 
     name = "damBreakFront"

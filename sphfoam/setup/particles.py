@@ -4,8 +4,8 @@ Fluid particles sit at the centres of a square lattice of spacing dx, so a block
 holds exactly its area / dx^2 particles and its surface lies dx/2 beyond the outermost row.
 Wall particles sit at the centres of the lattice cells *behind* the wall line, ``layers``
 rows deep, so the first wall row is dx/2 behind the wall and dx from the first fluid row.
-The initial state is hydrostatic: p = rho0 |g| (eta - y) with eta the local free surface above
-each particle, and rho from the inverse of the equation of state. Masses are rho dx^2.
+The initial state is hydrostatic: p = rho0 g_down (eta - y) with g_down = -g_y and eta the
+local free surface above each particle, and rho from the inverse of the equation of state. Masses are rho dx^2.
 """
 
 from __future__ import annotations
@@ -101,8 +101,8 @@ def generate(pd: ParticleDict, ctx, eos) -> ParticleState:
         xf, yf = xf[d >= 0.5 * dx], yf[d >= 0.5 * dx]
     if xf.size == 0:
         raise ValueError("system/particleDict: fluid regions produce no particles at this dx")
-    gmag = float(np.hypot(*ctx.g))
-    eta_f = local_surface(xf, yf, dx)
+    gdown = max(-float(ctx.g[1]), 0.0)   # hydrostatic along -y only (a body force along x,
+    eta_f = local_surface(xf, yf, dx)     # e.g. a channel's driving force, adds no pressure)
     if xw.size:
         _, nearest = cKDTree(np.column_stack([xf, yf])).query(np.column_stack([xw, yw]))
         eta_w = eta_f[nearest]
@@ -111,7 +111,7 @@ def generate(pd: ParticleDict, ctx, eos) -> ParticleState:
     x = np.concatenate([xf, xw])
     y = np.concatenate([yf, yw])
     eta = np.concatenate([eta_f, eta_w])
-    p = ctx.rho0 * gmag * np.maximum(eta - y, 0.0)
+    p = ctx.rho0 * gdown * np.maximum(eta - y, 0.0)
     rho = eos.density(p, ctx)
     kind = np.concatenate([np.full(xf.size, FLUID), np.full(xw.size, WALL)])
     u = np.concatenate([np.zeros(xf.size), uw])

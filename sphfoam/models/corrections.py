@@ -1,0 +1,246 @@
+"""Velocity and kernel corrections: XSPH, T(3.62)-(3.63)/P(36), and C-SPH, P(29)-(32).
+
+Both work through the pre-pass of the generated pipeline (see ``sphfoam.models.base``): for
+every particle a they loop over its neighbours with the plain kernel and store per-particle
+fields in ``aux``, which the rates and density loops then read for a and b.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from sphfoam.models.base import CaseContext, PipelineModel
+from sphfoam.registry import Coeffs, register
+
+
+class VelocityCorrection(PipelineModel):
+    family = "velocityCorrection"
+    prefix = "vc_"
+    #: positions move with u + aux[aux[0]], v + aux[aux[1]] (sphfoam.engine.simulation)
+    advects_positions: bool = False
+
+
+class KernelCorrection(PipelineModel):
+    family = "kernelCorrection"
+    prefix = "kc_"
+
+
+@register
+class XSPH(VelocityCorrection):
+    """Monaghan's XSPH velocity correction, T(3.62)-(3.63), P(36).
+
+    For each fluid particle a the pre-pass computes
+
+        dv_a = epsilon sum_b (m_b / rhobar_ab) (v_b - v_a) W_ab,   rhobar_ab = (rho_a + rho_b) / 2
+
+    over all its neighbours b (fluid and wall; a wall neighbour contributes its prescribed
+    velocity) with the plain kernel W_ab.  The sign is Monaghan's: the correction pulls v_a
+    towards the neighbours' mean velocity (T(3.63) as printed writes v_ab, P(36) writes m_a
+    for m_b; both are misprints of this form).  Wall particles get dv = 0: they keep their
+    prescribed velocity.
+
+    The corrected velocity v_a + dv_a moves the particles (``advects_positions``) and enters
+    the continuity equation, uc_ab = v_ab + dv_a - dv_b (T §3.6, "for consistency"); the
+    momentum equation uses the uncorrected v, so linear and angular momentum are unaffected.
+    Since m_a m_b / rhobar_ab W_ab is symmetric in a and b, sum_a m_a dv_a = 0 over the fluid
+    particles when no wall is in range.  epsilon = 0.5 is the value of both T §3.6 ("usually
+    chosen to be 0.5") and P §3 ("epsilon = 0.5 will be used").
+    """
+
+    name = "xsph"
+    doc = ("XSPH: positions and continuity use v_a + eps sum_b m_b/rhobar_ab v_ba W_ab, "
+           "T(3.62)-(3.63), P(36)")
+    advects_positions = True
+    aux = ("xsph_du", "xsph_dv")
+
+    class Coeffs(Coeffs):
+        epsilon: float = Field(0.5, gt=0.0, le=1.0, description=(
+            "strength of the smoothing, 0 < epsilon <= 1; 0.5 as in T §3.6 and P §3"))
+
+    prepass_init = """\
+xsph_su = 0.0
+xsph_sv = 0.0
+"""
+    prepass_pair = """\
+xsph_w = 2.0 * mb / (rhoa + rhob) * Wab
+xsph_su -= xsph_w * u_ab
+xsph_sv -= xsph_w * v_ab
+"""
+    prepass_final = """\
+if kind[a] == FLUID:
+    aux[I_xsph_du, a] = vc_eps * xsph_su
+    aux[I_xsph_dv, a] = vc_eps * xsph_sv
+else:
+    aux[I_xsph_du, a] = 0.0
+    aux[I_xsph_dv, a] = 0.0
+"""
+    continuity_velocity_code = """\
+uc_ab = u_ab + aux[I_xsph_du, a] - aux[I_xsph_du, b]
+vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
+"""
+
+    def params(self, ctx: CaseContext):
+        return {"vc_eps": self.coeffs.epsilon}
+
+
+@register
+class CSPH(KernelCorrection):
+    """Corrected SPH of Staroszczyk (Belytschko et al. 1998), P(29)-(32).
+
+    With x_ab = x_a - x_b, z_ab = z_a - z_b, P_ab = (1, x_ab, z_ab) and V_b = m_b / rho_b,
+    P(29)-(32) read
+
+        W~_ab          = (c11 + c12 x_ab + c13 z_ab) W^S_ab,    W^S_ab = W_ab / S_a,
+        (grad_a W~)_x  = (c21 + c22 x_ab + c23 z_ab) W^S_ab,    S_a = sum_b V_b W_ab,
+        (grad_a W~)_z  = (c31 + c32 x_ab + c33 z_ab) W^S_ab,
+        A = sum_b V_b W^S_ab P_ab P_ab^T,
+
+    with c fixed by the completeness conditions: the corrected kernel reproduces 1 and the
+    linear functions, sum_b V_b W~_ab P_ab = (1, 0, 0), and the corrected gradient reproduces
+    their gradients, sum_b V_b grad_a W~_ab f_b = grad f for every linear f.  Because
+    f_b = f_a - grad f . r_ab, the latter means sum_b V_b (grad_a W~_ab) P_ab^T = (0, -1, 0) for
+    x and (0, 0, -1) for z, so c = E A^-1 with E = diag(1, -1, -1).  (P(31) prints
+    c^T = A^-1, which is the same statement with the moments taken in x_b - x_a, the
+    convention of Belytschko et al.; with the x_ab of (29) the gradient rows change sign.)
+
+    The Shepard factor cancels: A = M / S_a with M = sum_b V_b W_ab P_ab P_ab^T, so with
+    B = M^-1 (symmetric)
+
+        W~_ab = (B11 + B12 x_ab + B13 z_ab) W_ab,
+        grad_a W~_ab = -(B12 + B22 x_ab + B23 z_ab,  B13 + B23 x_ab + B33 z_ab) W_ab.
+
+    The pre-pass accumulates M (in coordinates scaled by h, so that its entries are O(1)),
+    inverts it by cofactors and stores the six entries of B as ``csph_b11`` ... ``csph_b33``
+    and a flag ``csph_ok``; ``gradient_code`` replaces grad_a W_ab in the continuity, pressure
+    and viscous terms of the rates and density loops (P: "used to replace respective standard
+    SPH counterparts in the equations of continuity and motion").  The paper does not
+    symmetrise: grad_a W~_ab uses the coefficients of a only, so momentum is no longer
+    conserved exactly.
+
+    Stability (``symmetric``): with grad_a W~_ab taken from a alone, the discrete divergence
+    of the continuity equation and the discrete gradient of the momentum equation are no
+    longer adjoint, and at a free surface the linearised acoustic operator has eigenvalues
+    with a positive real part of the order of c0 / h (1.4 c0 / h for a free 12 x 12 block
+    with Wendland C2, h = 1.3 dx; 0.9 c0 / h with the Gaussian, h = 1.33 dx).  The damBreak
+    tutorial (dx = 12.5 mm) blows up from its free surface within 0.02 s this way: alone
+    (0.006 s), with XSPH, with delta-SPH, with an MLS re-initialisation every 20 steps, and
+    in P's own set-up (Gaussian, h = 1.33 dx, XSPH, a Shepard filter every 20 steps; 0.017 s).
+    ``symmetric yes`` uses the antisymmetric (grad~_a W_ab - grad~_b W_ba) / 2 instead
+    (Bonet & Lok 1999): momentum is conserved, the linearised operator is neutral (purely
+    imaginary spectrum) and the tutorial runs, at the price of the exact linear consistency.
+    The default is ``symmetric yes`` (a selection must not blow up by default); P's exact,
+    linear-consistent form is ``symmetric no``.
+
+    Neighbours: the sums run over the same neighbours b != a as the pair sums of the rates
+    (grad W_aa = 0 for the standard kernel, so (24)-(25) have no self term).  Then
+    sum_{b != a} V_b grad_a W~_ab = 0 and sum_{b != a} V_b grad_a W~_ab r_ab^T = -I exactly,
+    i.e. both the difference form and the plain form of a gradient are exact for linear
+    fields; W~ reproduces constants and linear fields over the same neighbours.  Fluid and
+    wall particles are neighbours alike, and wall particles get their own coefficients.
+
+    Singular A: a particle with fewer than three neighbours, or with neighbours (nearly) on
+    one line, e.g. in spray, has a singular or ill-conditioned A.  The determinant is
+    compared with Hadamard's bound, which is invariant to the units and to the Shepard
+    scaling: det M <= M11 M22 M33, with equality for a full, symmetric support.  When
+    det M < minDetRatio * M11 M22 M33 (1e-3 by default; the corner of a lattice block, a
+    quarter support, has 0.05 to 0.15 for h = dx to 2 dx, an edge about 0.5) the particle
+    falls back to the plain kernel gradient, ``csph_ok`` = 0 and its B entries are 0 (with
+    ``symmetric``, its half of every pair gradient is the plain one).
+    """
+
+    name = "cspH"
+    doc = ("C-SPH: Shepard kernel and first-order corrected gradient, c = A^-1 per particle, "
+           "P(29)-(32)")
+    aux = ("csph_b11", "csph_b12", "csph_b13", "csph_b22", "csph_b23", "csph_b33", "csph_ok")
+
+    class Coeffs(Coeffs):
+        minDetRatio: float = Field(1e-3, gt=0.0, lt=1.0, description=(
+            "a particle whose moment matrix has det A < minDetRatio * A11 A22 A33 (Hadamard's "
+            "bound; 1 for a full support) keeps the plain kernel gradient"))
+        symmetric: bool = Field(True, description=(
+            "use (grad~_a W_ab - grad~_b W_ba) / 2 (Bonet & Lok 1999) instead of P(29)'s "
+            "grad~_a W_ab: conserves momentum and is stable at a free surface (P's form is "
+            "not), but no longer exact for linear fields"))
+
+    prepass_init = """\
+csph_m11 = 0.0
+csph_m12 = 0.0
+csph_m13 = 0.0
+csph_m22 = 0.0
+csph_m23 = 0.0
+csph_m33 = 0.0
+"""
+    prepass_pair = """\
+csph_vw = mb / rhob * Wab
+csph_xs = dx_ab * inv_h
+csph_zs = dy_ab * inv_h
+csph_m11 += csph_vw
+csph_m12 += csph_vw * csph_xs
+csph_m13 += csph_vw * csph_zs
+csph_m22 += csph_vw * csph_xs * csph_xs
+csph_m23 += csph_vw * csph_xs * csph_zs
+csph_m33 += csph_vw * csph_zs * csph_zs
+"""
+    prepass_final = """\
+csph_k11 = csph_m22 * csph_m33 - csph_m23 * csph_m23
+csph_k12 = csph_m13 * csph_m23 - csph_m12 * csph_m33
+csph_k13 = csph_m12 * csph_m23 - csph_m13 * csph_m22
+csph_det = csph_m11 * csph_k11 + csph_m12 * csph_k12 + csph_m13 * csph_k13
+csph_had = csph_m11 * csph_m22 * csph_m33
+if csph_had > 0.0 and csph_det > kc_detmin * csph_had:
+    csph_inv = 1.0 / csph_det
+    csph_ih2 = inv_h * inv_h
+    aux[I_csph_b11, a] = csph_k11 * csph_inv
+    aux[I_csph_b12, a] = csph_k12 * csph_inv * inv_h
+    aux[I_csph_b13, a] = csph_k13 * csph_inv * inv_h
+    aux[I_csph_b22, a] = (csph_m11 * csph_m33 - csph_m13 * csph_m13) * csph_inv * csph_ih2
+    aux[I_csph_b23, a] = (csph_m12 * csph_m13 - csph_m11 * csph_m23) * csph_inv * csph_ih2
+    aux[I_csph_b33, a] = (csph_m11 * csph_m22 - csph_m12 * csph_m12) * csph_inv * csph_ih2
+    aux[I_csph_ok, a] = 1.0
+else:
+    aux[I_csph_b11, a] = 0.0
+    aux[I_csph_b12, a] = 0.0
+    aux[I_csph_b13, a] = 0.0
+    aux[I_csph_b22, a] = 0.0
+    aux[I_csph_b23, a] = 0.0
+    aux[I_csph_b33, a] = 0.0
+    aux[I_csph_ok, a] = 0.0
+"""
+    #: grad~_a W_ab of P(29)-(32): coefficients of a only
+    _GRADIENT_A = """\
+if aux[I_csph_ok, a] != 0.0:
+    gWx = -(aux[I_csph_b12, a] + aux[I_csph_b22, a] * dx_ab + aux[I_csph_b23, a] * dy_ab) * Wab
+    gWy = -(aux[I_csph_b13, a] + aux[I_csph_b23, a] * dx_ab + aux[I_csph_b33, a] * dy_ab) * Wab
+else:
+    fw = kern_gw * kernel_dfdq_q(q)
+    gWx = fw * dx_ab
+    gWy = fw * dy_ab
+"""
+    #: (grad~_a W_ab - grad~_b W_ba) / 2, Bonet & Lok (1999); r_ba = -r_ab
+    _GRADIENT_SYMMETRIC = """\
+fw = kern_gw * kernel_dfdq_q(q)
+if aux[I_csph_ok, a] != 0.0:
+    gWx = -(aux[I_csph_b12, a] + aux[I_csph_b22, a] * dx_ab + aux[I_csph_b23, a] * dy_ab) * Wab
+    gWy = -(aux[I_csph_b13, a] + aux[I_csph_b23, a] * dx_ab + aux[I_csph_b33, a] * dy_ab) * Wab
+else:
+    gWx = fw * dx_ab
+    gWy = fw * dy_ab
+if aux[I_csph_ok, b] != 0.0:
+    gWx += (aux[I_csph_b12, b] - aux[I_csph_b22, b] * dx_ab - aux[I_csph_b23, b] * dy_ab) * Wab
+    gWy += (aux[I_csph_b13, b] - aux[I_csph_b23, b] * dx_ab - aux[I_csph_b33, b] * dy_ab) * Wab
+else:
+    gWx += fw * dx_ab
+    gWy += fw * dy_ab
+gWx *= 0.5
+gWy *= 0.5
+"""
+
+    @property
+    def gradient_code(self) -> str:
+        return self._GRADIENT_SYMMETRIC if self.coeffs.symmetric else self._GRADIENT_A
+
+    def selection_key(self) -> str:
+        return "symmetric" if self.coeffs.symmetric else ""
+
+    def params(self, ctx: CaseContext):
+        return {"kc_detmin": self.coeffs.minDetRatio}
