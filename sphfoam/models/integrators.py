@@ -216,6 +216,11 @@ class Verlet(Model):
     """Verlet scheme of DualSPHysics (Monaghan 1989): v^n+1 = v^n-1 + 2 dt F^n,
     r^n+1 = r^n + dt v^n + dt^2/2 F^n, rho^n+1 = rho^n-1 + 2 dt D^n.
 
+    Limitation (measured): the leapfrog branch v^{n+1} = v^{n-1} + 2 dt F^n is unconditionally
+    unstable on a diffusion term, so a viscosity-dominated flow (the laminar Poiseuille case at
+    Re = 1) blows up after some 30-40 s even with an Euler step every 40; use another integrator
+    there, or a small ``everyN``.
+
     One force evaluation per step; dt from T(3.88)-(3.90). Every ``everyN`` steps (by the run's
     step index), on the first step, after a density-filter pass, and whenever the stored
     history does not belong to the step just before (e.g. after a restart from a time written

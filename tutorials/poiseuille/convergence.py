@@ -48,7 +48,7 @@ HERE = Path(__file__).resolve().parent
 #: channel width of T section 3.4.1 (m)
 WIDTH = 0.01
 #: periodic length of the channel in particle spacings (>= 3 neighbour cells of 1.05 x 2.5 h)
-COLUMNS = 12
+COLUMNS = 14
 #: the safety factor of the PSCI, Roache (1998), T(3.53)
 SAFETY = 1.25
 
