@@ -107,3 +107,22 @@ def test_seam_pairs_match_minimum_image_brute_force(box):
     np.add.at(asym, j, st.m[i][:, None] * (2 * pr[j])[:, None] * gW)
     bad = np.sum(st.m[:, None] * asym, axis=0)
     assert np.abs(bad).max() > 1e-6 * np.sum(st.m[:, None] * np.abs(asym))
+
+
+def test_density_only_pass_carries_every_drho_term():
+    """monaghan2007's end-of-step density_rate must include delta-SPH diffusion, not only
+    continuity: it equals the drho of the full rates pass on the same state."""
+    models = {f: registry.build(f, s) for f, s in SPECS.items()}
+    sel = Selection(**models, densityFilter=registry.build("densityFilter", {"type": "deltaSPH"}),
+                    periodic_x=True, periodic_y=True)
+    ctx = CaseContext(dx=DX, h=H, rho0=1000.0, nu=1e-6, g=(0.0, 0.0), fluid_height=L, c0=10.0)
+    kappa = models["kernel"].support
+    core = dict(h=H, inv_h=1 / H, support2=(kappa * H) ** 2, eta2=0.01 * H * H, gx=0.0, gy=0.0,
+                lx=L, ly=L)
+    sim = make_sim((sel, ctx, build_pipeline(sel, ctx, core), kappa), seed=2)
+    sim.neighbour_update()
+    sim.eos()
+    sim.rates()
+    full = sim.state.drho.copy()
+    sim.density_rate()
+    np.testing.assert_allclose(sim.state.drho, full, rtol=1e-12, atol=1e-12 * np.abs(full).max())

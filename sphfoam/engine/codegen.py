@@ -195,6 +195,8 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     others = [m.pair_code for m in sel.models()
               if m is not sel.continuity and getattr(m, "pair_code", "")]
     fluid_body = "\n".join([continuity, *others, _SIGMA if sel.adjust_time_step else ""])
+    # every term of drho/dt (continuity, and e.g. delta-SPH diffusion) in the density-only pass
+    density_body = "\n".join([continuity, *(c for c in others if "drho_a" in c)])
     wall_rates = _pair_loop(sel, continuity, gradient) if sel.boundary.wall_density_evolves \
         else "pass"
     particle_code = sel.snippet("particle_code")
@@ -268,7 +270,7 @@ def density_rate({_ARGS}, out_drho):
 {_block(_PARTICLE_LOAD, 8)}
         drho_a = 0.0
         if kind[a] == FLUID:
-{_block(_pair_loop(sel, continuity, gradient), 12)}
+{_block(_pair_loop(sel, density_body, gradient), 12)}
         else:
 {_block(wall_rates, 12)}
         out_drho[a] = drho_a
