@@ -30,7 +30,8 @@ FAMILIES: dict[str, str] = {
     "velocityCorrection": "correction of the advection velocity (e.g. XSPH)",
     "kernelCorrection": "corrected kernels and gradients (e.g. C-SPH)",
     "integrator": "time-marching scheme",
-    "motion": "prescribed motion of boundary particles",
+    "motion": "prescribed motion of a wall (particleDict walls.<name>.motion)",
+    "waveMaker": "paddle trajectory X(t) of a wave maker (pistonPaddle waveMaker)",
     "functionObject": "in-run and post-processing sampling",
 }
 

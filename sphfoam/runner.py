@@ -22,7 +22,9 @@ from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.case.times import list_times, time_name
 from sphfoam.engine.codegen import Selection, build_pipeline
 from sphfoam.engine.simulation import Simulation
-from sphfoam.engine.state import ParticleState
+from sphfoam.case.case import SPH_PROPERTIES
+from sphfoam.engine.state import WALL, ParticleState
+from sphfoam.setup.geometry import segments_of
 from sphfoam.io.fields import has_particles, read_state, write_state
 from sphfoam.setup.particles import default_domain, generate
 
@@ -65,8 +67,11 @@ class RunReport:
 def setup_case(case: Case, log=print) -> ParticleState:
     """Generate particles from system/particleDict and write them to ``0/``."""
     case.validate()
-    eos = case.models.sph["equationOfState"]
-    state = generate(case.particles, case.context, eos)
+    sph = case.models.sph
+    eos = sph["equationOfState"]
+    state = generate(case.particles, case.context, eos, boundary=sph["boundary"],
+                     support_radius=sph["kernel"].support * case.context.h,
+                     moving=bool(case.models.motions))
     sim_p = eos.B(case.context) * ((state.rho / case.context.rho0) ** eos.coeffs.gamma - 1.0)
     write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
     log(f"setup: {state.n_fluid} fluid + {state.n - state.n_fluid} wall particles "
@@ -124,10 +129,12 @@ def build_simulation(case: Case, state: ParticleState) -> Simulation:
     lo, hi = default_domain(case.particles)
     core = dict(h=h, inv_h=1.0 / h, support2=(kernel.support * h) ** 2, eta2=0.01 * h * h,
                 gx=ctx.g[0], gy=ctx.g[1], lx=hi[0] - lo[0], ly=hi[1] - lo[1])
+    check_wall_fields(case, state)
     pipe = build_pipeline(sel, ctx, core)
     c = case.control
     filt = sph["densityFilter"]
     return Simulation(state, pipe, case.models.integrator, h=h, support=kernel.support,
+                      segments=segments_of(case.particles), motions=case.models.motions,
                       domain_lo=lo, domain_hi=hi, beta=c.maxCo,
                       force_condition=case.schemes.timeStepControl.forceCondition,
                       adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
@@ -135,6 +142,31 @@ def build_simulation(case: Case, state: ParticleState) -> Simulation:
                       cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
                       filter_every=getattr(filt.coeffs, "every", 0),
                       dt_limit=min(m.dt_limit(ctx) for m in sel.models()))
+
+
+def check_wall_fields(case: Case, state: ParticleState) -> None:
+    """The particles must have been set up for the selected boundary (and motions)."""
+    bnd = case.models.sph["boundary"]
+    pd = case.particles
+    problem = None
+    walls = state.kind == WALL
+    missing = [k for k in bnd.wall_fields if k not in state.extra] if walls.any() else []
+    if case.models.motions:
+        missing += [k for k in ("patch", "x0", "y0") if k not in state.extra]
+    if missing:
+        problem = f"the particles lack the field(s) {', '.join(missing)}"
+    elif bnd.wall_placement == "none" and walls.any():
+        problem = "the particles include wall particles, which mirrorGhosts does not use"
+    elif walls.any() and "wallDist" in state.extra:
+        d = state.extra["wallDist"][walls]
+        if bnd.wall_placement == "line" and d.max() > 1e-6 * pd.dx:
+            problem = "the wall particles lie behind the walls, not on them"
+        if bnd.wall_placement == "rows" and d.min() < 0.25 * pd.dx:
+            problem = "the wall particles lie on the walls, not in rows behind them"
+    if problem:
+        raise CaseError.single(SPH_PROPERTIES, "boundary.type",
+                               f"{problem}: they were set up for another boundary; run "
+                               f"'sphfoam setup --force' again for {bnd.name}")
 
 
 def run_case(case: Case | str | Path, *, progress: bool = True, echo=print,

@@ -139,6 +139,9 @@ class FakeSim:
     def eos(self):
         pass
 
+    def move_walls(self, t):
+        pass
+
     def rates(self):
         st = self.state
         self.n_rates += 1

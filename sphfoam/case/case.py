@@ -50,6 +50,8 @@ class Models:
     sph: dict[str, registry.Model]
     integrator: registry.Model
     functions: dict[str, registry.Model]
+    #: prescribed wall motions by wall-entry index (system/particleDict walls.<name>.motion)
+    motions: dict[int, registry.Model]
 
 
 class Case:
@@ -133,9 +135,28 @@ class Case:
             if fo is not None:
                 fo.object_name = name
                 functions[name] = fo
+        motions = {}
+        pd_file = FILES["particleDict"][0]
+        try:
+            walls = self.particles.walls
+        except CaseError as e:
+            problems.extend(e.problems)
+            walls = {}
+        for i, (name, wall) in enumerate(walls.items()):
+            if wall.motion is None:
+                continue
+            mot = self._build("motion", wall.motion, pd_file, f"walls.{name}.motion", problems)
+            if mot is None:
+                continue
+            try:
+                mot.resolve(self.path)
+            except (OSError, ValueError) as e:
+                problems.append(Problem(pd_file, f"walls.{name}.motion.file", str(e)))
+                continue
+            motions[i] = mot
         if problems:
             raise CaseError(problems)
-        return Models(sph, integ, functions)
+        return Models(sph, integ, functions, motions)
 
     @staticmethod
     def _build(family, spec, file, key, problems):

@@ -163,7 +163,21 @@ class PolygonRegion(Strict):
 FluidRegion = Annotated[BoxRegion | PolygonRegion, Field(discriminator="type")]
 
 
-class BoxWalls(Strict):
+_MOTION_DOC = ("prescribed motion of this wall, { type <motion>; ... } (sphfoam models "
+               "motion): e.g. a piston wave paddle or a displacement table")
+
+
+class _Wall(Strict):
+    motion: dict[str, Any] | None = Field(None, description=_MOTION_DOC)
+
+    @model_validator(mode="after")
+    def _one_motion(self):
+        if self.motion is not None and tuple(getattr(self, "velocity", (0.0, 0.0))) != (0.0, 0.0):
+            raise ValueError("give either a constant velocity or a motion, not both")
+        return self
+
+
+class BoxWalls(_Wall):
     """A rectangular tank: wall rows outside ``min``..``max``; ``open`` sides get none."""
 
     type: Literal["box"]
@@ -180,7 +194,7 @@ class BoxWalls(Strict):
         return [v] if isinstance(v, str) else v
 
 
-class PolylineWalls(Strict):
+class PolylineWalls(_Wall):
     """Wall rows along a polyline; the solid lies on ``side`` of the direction of travel."""
 
     type: Literal["polyline"]
@@ -191,7 +205,19 @@ class PolylineWalls(Strict):
     velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
 
 
-WallRegion = Annotated[BoxWalls | PolylineWalls, Field(discriminator="type")]
+class SlopeWalls(_Wall):
+    """A plane slope (e.g. the 5 degree beach of T ch. 5) rising from ``start`` at ``angle``
+    degrees to the horizontal over ``length`` metres along the slope; the solid lies below."""
+
+    type: Literal["slope"]
+    start: Vector2
+    angle: float = Field(gt=-90.0, lt=90.0, description="degrees above the +x axis")
+    length: float = Field(gt=0, description="length along the slope (m)")
+    layers: int = Field(3, ge=1, le=10, description="rows of wall particles")
+    velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
+
+
+WallRegion = Annotated[BoxWalls | PolylineWalls | SlopeWalls, Field(discriminator="type")]
 
 
 class Domain(Strict):

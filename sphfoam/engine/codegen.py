@@ -92,6 +92,10 @@ class Selection:
                 names.append(a)
         return names
 
+    def field_names(self) -> list[str]:
+        """Per-particle persistent fields the generated code reads as ``fld[F_<name>, i]``."""
+        return list(getattr(self.boundary, "wall_fields", ()))
+
     def snippet(self, hook: str) -> str:
         return "\n".join(c for c in (getattr(m, hook, "") for m in self.models()) if c)
 
@@ -179,7 +183,8 @@ def _pair_loop(sel: Selection, body: str, gradient: str | None = None) -> str:
                          wrap=_block(wrap, 12) + ("\n" if wrap else ""), body=_block(full, 12))
 
 
-_ARGS = "x, y, u, v, rho, p, c, m, kind, cell_start, x0, y0, inv_cell, ncx, ncy, prm, aux"
+_ARGS = ("x, y, u, v, rho, p, c, m, kind, cell_start, x0, y0, inv_cell, ncx, ncy, prm, aux, "
+         "fld")
 
 
 def generate_source(sel: Selection, param_names: list[str]) -> str:
@@ -188,18 +193,25 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     bind = "\n".join(f"{name} = prm[{i}]" for i, name in enumerate(param_names))
     aux = sel.aux_names()
     aux_const = "\n".join(f"I_{a} = {i}" for i, a in enumerate(aux))
+    fields = sel.field_names()
+    fld_const = "\n".join(f"F_{a} = {i}" for i, a in enumerate(fields))
     gradient = next((m.gradient_code for m in sel.models()
                      if getattr(m, "gradient_code", "")), None)
     continuity = _CONTINUITY_VELOCITY + sel.snippet("continuity_velocity_code") + "\n" + \
         sel.continuity.pair_code
     others = [m.pair_code for m in sel.models()
               if m is not sel.continuity and getattr(m, "pair_code", "")]
-    fluid_body = "\n".join([continuity, *others, _SIGMA if sel.adjust_time_step else ""])
+    bnd = sel.boundary
+    # the boundary model decides which terms a wall neighbour enters (sphfoam.models.boundaries)
+    fluid_body = bnd.fluid_body("\n".join([continuity, *others]), sel.viscosity.pair_code)
+    fluid_body += "\n" + (_SIGMA if sel.adjust_time_step else "")
     # every term of drho/dt (continuity, and e.g. delta-SPH diffusion) in the density-only pass
-    density_body = "\n".join([continuity, *(c for c in others if "drho_a" in c)])
-    wall_rates = _pair_loop(sel, continuity, gradient) if sel.boundary.wall_density_evolves \
-        else "pass"
+    density_body = bnd.density_body("\n".join([continuity,
+                                               *(c for c in others if "drho_a" in c)]))
+    wall_code = bnd.wall_body(continuity)
+    wall_rates = _pair_loop(sel, wall_code, gradient) if wall_code else "pass"
     particle_code = sel.snippet("particle_code")
+    has_prepass = any(sel.snippet(k) for k in ("prepass_init", "prepass_pair", "prepass_final"))
 
     parts = [f'''"""sphfoam pipeline, generated for: {sel.describe()}; adjustTimeStep={sel.adjust_time_step}.
 
@@ -216,6 +228,8 @@ FLUID = 0
 PARAMS = {tuple(param_names)!r}
 AUX = {tuple(aux)!r}
 {aux_const}
+FIELDS = {tuple(fields)!r}
+{fld_const}
 
 
 @njit(parallel=True, fastmath=True, cache=True)
@@ -224,7 +238,7 @@ def equation_of_state(rho, p, c, prm):
     for a in prange(rho.shape[0]):
 {_block(sel.equationOfState.eos_code, 8)}
 ''']
-    if aux:
+    if has_prepass:
         parts.append(f'''
 
 @njit(parallel=True, fastmath=True, cache=True)
@@ -274,6 +288,20 @@ def density_rate({_ARGS}, out_drho):
         else:
 {_block(wall_rates, 12)}
         out_drho[a] = drho_a
+''')
+    if getattr(bnd, "step_pair", ""):
+        parts.append(f'''
+
+@njit(parallel=True, fastmath=True, cache=True)
+def boundary_step({_ARGS}):
+    """Once per step, after the re-sort: {bnd.name} wall-particle state."""
+{_block(bind, 4)}
+    for a in prange(x.shape[0]):
+        if kind[a] != FLUID:
+{_block(_PARTICLE_LOAD, 12)}
+{_block(bnd.step_init, 12)}
+{_block(_pair_loop(sel, bnd.step_pair), 12)}
+{_block(bnd.step_final, 12)}
 ''')
     filt = sel.densityFilter
     if filt is not None and getattr(filt, "filter_pair", ""):
@@ -326,6 +354,15 @@ class Pipeline:
     @property
     def density_filter(self):
         return getattr(self.module, "density_filter", None)
+
+    @property
+    def boundary_step(self):
+        """None unless the boundary keeps a per-step wall state (e.g. hybrid wet/dry)."""
+        return getattr(self.module, "boundary_step", None)
+
+    @property
+    def fields(self) -> tuple[str, ...]:
+        return tuple(self.module.FIELDS)
 
     @property
     def n_aux(self) -> int:
@@ -384,8 +421,9 @@ def _warm_up(module, prm):
     rho = np.full(n, 1000.0)
     cell_start = np.array([0, 2], dtype=np.int64)
     aux = np.zeros((len(module.AUX), n))
+    fld = np.zeros((len(module.FIELDS), n))
     module.equation_of_state(rho, f.copy(), f.copy(), prm)
-    args = (x, f, f, f, rho, f, f, m, kind, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, aux)
+    args = (x, f, f, f, rho, f, f, m, kind, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, aux, fld)
     funcs = [module.equation_of_state, module.rates, module.density_rate]
     module.rates(*args, f.copy(), f.copy(), f.copy(), f.copy())
     module.density_rate(*args, f.copy())
@@ -395,4 +433,7 @@ def _warm_up(module, prm):
     if hasattr(module, "density_filter"):
         module.density_filter(*args, f.copy())
         funcs.append(module.density_filter)
+    if hasattr(module, "boundary_step"):
+        module.boundary_step(*args)
+        funcs.append(module.boundary_step)
     return funcs

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, prange
 
+from sphfoam.engine import ghosts as gh
 from sphfoam.engine.neighbours import CellList, permute
-from sphfoam.engine.state import FLUID, ParticleState
+from sphfoam.engine.state import FLUID, GHOST, ParticleState
 from sphfoam.engine.timestep import stable_time_step
 
 
@@ -23,6 +24,17 @@ def add_correction(u, du, kind):
     for a in prange(u.shape[0]):
         out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
     return out
+
+
+@njit(parallel=True, cache=True)
+def prescribe_patch(x, y, u, v, patch, x0, y0, which, ox, oy, uu, vv):
+    """Particles of wall entry ``which``: r = r0 + d(t), v = d'(t)."""
+    for a in prange(x.shape[0]):
+        if patch[a] == which:
+            x[a] = x0[a] + ox
+            y[a] = y0[a] + oy
+            u[a] = uu
+            v[a] = vv
 
 
 @dataclass
@@ -40,7 +52,7 @@ class Simulation:
                  domain_lo, domain_hi, beta: float, force_condition: bool,
                  adjust_time_step: bool, delta_t: float, max_delta_t: float = math.inf,
                  cell_size_factor: float = 1.05, filter_every: int = 0,
-                 dt_limit: float = math.inf):
+                 dt_limit: float = math.inf, segments=(), motions=None):
         self.state = state
         self.pipeline = pipeline
         self.prm = pipeline.prm
@@ -67,11 +79,76 @@ class Simulation:
         self.removals: list[Removal] = []
         self.aux = np.zeros((pipeline.n_aux, state.n))
         self.on_removal = None
+        self._fld = None
+        #: prescribed motions by wall-entry index (sphfoam.models.motion)
+        self.motions = dict(motions or {})
+        self.segments = list(segments)
+        bnd = sel.boundary
+        self.mirror = bool(getattr(bnd, "ghosts", False))
+        if self.mirror:
+            if not self.segments:
+                raise ValueError("mirrorGhosts needs walls in system/particleDict")
+            self.no_slip = bool(bnd.coeffs.noSlip)
+            self.reach = support * h
+            self.seg = gh.segment_array(self.segments)
+            self.corners = gh.corner_pairs(self.segments, 1e-9 * max(1.0, self.reach))
+            self._ghost = None
+
+    # --- walls ---------------------------------------------------------------------------
+    def move_walls(self, t: float):
+        """Put every wall with a prescribed motion where it is at time ``t`` (particles and,
+        for mirrored ghosts, segments). The integrators call this at each stage time."""
+        if not self.motions:
+            return
+        st = self.state
+        offs, vels = {}, {}
+        for which, mot in self.motions.items():
+            (ox, oy), (uu, vv) = mot.displacement(t), mot.velocity(t)
+            offs[which], vels[which] = (ox, oy), (uu, vv)
+            if "patch" in st.extra:
+                prescribe_patch(st.x, st.y, st.u, st.v, st.extra["patch"], st.extra["x0"],
+                                st.extra["y0"], float(which), ox, oy, uu, vv)
+        if self.mirror:
+            self.seg = gh.segment_array(self.segments, offs, vels)
+        self._sync_ghosts()
+
+    def _make_ghosts(self):
+        """Mirror every fluid particle near a wall across it (T(3.77)); returns the cells of
+        the new ghosts (those outside the cell grid are dropped)."""
+        st = self.state
+        count = np.zeros(st.n, dtype=np.int64)
+        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
+        offset = np.zeros(st.n, dtype=np.int64)
+        np.cumsum(count[:-1], out=offset[1:])
+        ng = int(count.sum())
+        src = np.empty(ng, dtype=np.int64)
+        s1 = np.empty(ng, dtype=np.int64)
+        s2 = np.empty(ng, dtype=np.int64)
+        gh.fill_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, offset, src,
+                       s1, s2)
+        n0 = st.n
+        st.append(np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng),
+                  np.zeros(ng), np.full(ng, GHOST), -1 - st.id[src])
+        gidx = np.arange(n0, n0 + ng)
+        gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2, self.seg,
+                          self.no_slip)
+        self._ghost = (gidx, src, s1, s2)
+
+    def _sync_ghosts(self):
+        if self.mirror and self._ghost is not None:
+            st = self.state
+            gidx, src, s1, s2 = self._ghost
+            gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
+                              self.seg, self.no_slip)
 
     # --- stages --------------------------------------------------------------------------
     def neighbour_update(self):
-        """Bin into cells, drop particles that left the domain, sort by cell."""
+        """Bin into cells, drop particles that left the domain, (re)make mirrored ghosts,
+        sort by cell."""
         st = self.state
+        self._fld = None
+        if self.mirror and (st.kind == GHOST).any():
+            st.keep(st.kind != GHOST)
         cell, outside = self.cells.bin(st.x, st.y)
         if outside:
             gone = cell < 0
@@ -82,15 +159,36 @@ class Simulation:
                 self.on_removal(rem)
             st.keep(~gone)
             cell = cell[~gone]
+        if self.mirror:
+            n0 = st.n
+            self._make_ghosts()
+            gcell, gout = self.cells.bin(st.x[n0:], st.y[n0:])
+            cell = np.concatenate([cell, gcell])
+            if gout:      # a ghost beyond the grid: drop it (its particle is at the edge)
+                keep = cell >= 0
+                st.keep(keep)
+                cell = cell[keep]
+                gidx, src, s1, s2 = self._ghost
+                kg = keep[n0:]
+                self._ghost = (np.arange(n0, n0 + int(kg.sum())), src[kg], s1[kg], s2[kg])
         order = self.cells.sort(cell)
         st.apply(order, permute)
+        if self.mirror:
+            inv = np.empty_like(order)
+            inv[order] = np.arange(order.size)
+            gidx, src, s1, s2 = self._ghost
+            self._ghost = (inv[gidx], inv[src], s1, s2)
 
     def _grid_args(self):
         st, cl = self.state, self.cells
         if self.aux.shape[1] != st.n:
             self.aux = np.zeros((self.pipeline.n_aux, st.n))
+        if self._fld is None or self._fld.shape[1] != st.n:
+            names = self.pipeline.fields
+            self._fld = (np.stack([st.extra[k] for k in names]) if names
+                         else np.zeros((0, st.n)))
         return (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, cl.cell_start,
-                cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy, self.prm, self.aux)
+                cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy, self.prm, self.aux, self._fld)
 
     def _prepass(self, args):
         if self.pipeline.prepass is not None:
@@ -119,15 +217,23 @@ class Simulation:
 
     def eos(self):
         st = self.state
+        self._sync_ghosts()
         self.pipeline.equation_of_state(st.rho, st.p, st.c, self.prm)
+
+    def boundary_step(self):
+        """The boundary's once-per-step wall update (e.g. hybrid wet/dry), if it has one."""
+        if self.pipeline.boundary_step is not None:
+            self.pipeline.boundary_step(*self._grid_args())
 
     def rates(self):
         st = self.state
+        self._sync_ghosts()
         args = self._grid_args()
         self._prepass(args)
         self.pipeline.rates(*args, st.ax, st.ay, st.drho, st.sigma)
 
     def density_rate(self):
+        self._sync_ghosts()
         args = self._grid_args()
         self._prepass(args)
         self.pipeline.density_rate(*args, self.state.drho)
@@ -143,7 +249,9 @@ class Simulation:
     # --- stepping ------------------------------------------------------------------------
     def step(self, dt_remaining: float = math.inf) -> float:
         """Re-sort, filter the density when due, then one step of the integrator."""
+        self.move_walls(self.time)
         self.neighbour_update()
+        self.boundary_step()
         if self.filter_every and self.step_index > 0 and self.step_index % self.filter_every == 0:
             self.filter_density()
         dt = self.integrator.step(self, dt_remaining)

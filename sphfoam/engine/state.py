@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-#: particle kinds (the ``type`` field of a time directory)
-FLUID, WALL = 0, 1
-KIND_NAMES = {FLUID: "fluid", WALL: "wall"}
+#: particle kinds (the ``type`` field of a time directory); ghosts (mirrored across walls
+#: each step, T(3.77)) live only inside a step and are never written
+FLUID, WALL, GHOST = 0, 1, 2
+KIND_NAMES = {FLUID: "fluid", WALL: "wall", GHOST: "ghost"}
 
 #: persistent arrays (permuted when particles are re-sorted, written to time directories)
 PERSISTENT_F8 = ("x", "y", "u", "v", "rho", "m")
@@ -72,20 +73,32 @@ class ParticleState:
             self.extra[name] = np.ascontiguousarray(self.extra[name][mask])
         self._alloc_scratch()
 
+    def append(self, x, y, u, v, rho, m, kind, id):
+        """Add particles at the end (extra fields get zeros)."""
+        k = len(x)
+        for name, new in zip(PERSISTENT_F8 + PERSISTENT_I8, (x, y, u, v, rho, m, kind, id)):
+            setattr(self, name, np.ascontiguousarray(np.concatenate([getattr(self, name), new])))
+        for name in self.extra:
+            self.extra[name] = np.concatenate([self.extra[name], np.zeros(k)])
+        self._alloc_scratch()
+
     # --- time-directory fields -----------------------------------------------------------
     def to_fields(self, p=None) -> dict[str, np.ndarray]:
+        """The fields of a time directory (ghost particles left out)."""
+        real = self.kind != GHOST
+        sel = slice(None) if real.all() else real
         out = {
-            "positions": np.column_stack([self.x, self.y]),
-            "U": np.column_stack([self.u, self.v]),
-            "rho": self.rho.copy(),
-            "mass": self.m.copy(),
-            "type": self.kind.copy(),
-            "origId": self.id.copy(),
+            "positions": np.column_stack([self.x[sel], self.y[sel]]),
+            "U": np.column_stack([self.u[sel], self.v[sel]]),
+            "rho": self.rho[sel].copy(),
+            "mass": self.m[sel].copy(),
+            "type": self.kind[sel].copy(),
+            "origId": self.id[sel].copy(),
         }
         if p is not None:
-            out["p"] = np.asarray(p, dtype=np.float64).copy()
+            out["p"] = np.asarray(p, dtype=np.float64)[sel].copy()
         for k, a in self.extra.items():
-            out[k] = a.copy()
+            out[k] = a[sel].copy()
         return out
 
     @classmethod

@@ -11,7 +11,9 @@ from sphfoam.models import (  # noqa: F401
     filters,
     integrators,
     kernels,
+    motion,
     noop,
     turbulence,
     viscosity,
+    wavemakers,
 )

@@ -1,18 +1,68 @@
-"""Solid-wall representations (T §3.8-3.9)."""
+"""Solid-wall representations (T §3.8-3.9, P §4).
+
+Five ways to keep water out of a wall, as the thesis compares them:
+
+==========================  ===================  =============================================
+model                       wall particles       how the fluid feels the wall
+==========================  ===================  =============================================
+``stationaryGhosts``        rows behind the wall pressure and viscosity of wall particles whose
+                                                 density evolves by pairing (Violeau & Issa)
+``repulsiveMonaghanKos``    one row on the wall  normal force T(3.70)-(3.72), viscosity
+``repulsiveMonaghan2003``   one row on the wall  normal force T(3.73)-(3.76), viscosity
+``mirrorGhosts``            none (segments)      fluid near a wall mirrored across it each
+                                                 step, T(3.77)-(3.80) (free- or no-slip)
+``hybrid``                  rows behind the wall stationary ghosts where wet, Monaghan-Kos
+                                                 force (range dx) where dry, T §3.9
+==========================  ===================  =============================================
+
+Where the fluid pair loop meets a wall neighbour ``b`` the repulsive forms read the wall
+normal ``fld[F_nx, b], fld[F_ny, b]`` (into the fluid) stored per wall particle by the set-up
+(``sphfoam.setup.geometry``). Corner treatment: a wall particle at a corner vertex (flag
+``corner``) has no single normal, so it repels radially, along r_ab, with chi = 1 (the force
+of a point rather than of a wall); its neighbours along either wall act with their own normals.
+"""
 
 from __future__ import annotations
 
-from sphfoam.models.base import PipelineModel
-from sphfoam.registry import register
+import math
+
+from pydantic import Field
+
+from sphfoam.models.base import CaseContext, PipelineModel
+from sphfoam.registry import Coeffs, register
 
 
 class Boundary(PipelineModel):
     family = "boundary"
     prefix = "bnd_"
-    #: lines run for a wall particle a inside its pair loop (rates of wall particles)
-    wall_pair_code: str = ""
+    #: where set-up puts wall particles: "rows" (``layers`` rows behind the wall line, cell
+    #: centred), "line" (one row on the line, spacing dx, corners included) or "none"
+    wall_placement: str = "rows"
+    #: per-particle fields (set-up writes them for wall particles) the generated code reads
+    #: as ``fld[F_<name>, b]``
+    wall_fields: tuple[str, ...] = ()
     #: True when wall particles take part in the continuity equation (their density evolves)
     wall_density_evolves: bool = False
+    #: True when the engine mirrors fluid particles across the wall segments every step
+    ghosts: bool = False
+    #: a once-per-step pass over the particles (after the neighbour re-sort), in the generated
+    #: ``boundary_step``: per particle a, its neighbour loop, and after the loop
+    step_init: str = ""
+    step_pair: str = ""
+    step_final: str = ""
+
+    def fluid_body(self, full: str, viscous: str) -> str:
+        """Pair code for a fluid particle ``a`` and any neighbour ``b``; ``full`` holds every
+        selected term (continuity, momentum, viscosity, ...), ``viscous`` the viscosity alone."""
+        return full
+
+    def density_body(self, continuity: str) -> str:
+        """Pair code of the density-only pass for a fluid particle ``a``."""
+        return continuity
+
+    def wall_body(self, continuity: str) -> str:
+        """Pair code of a wall particle ``a`` in the rates and density passes ("" = none)."""
+        return continuity if self.wall_density_evolves else ""
 
 
 @register
@@ -28,3 +78,222 @@ class StationaryGhosts(Boundary):
     name = "stationaryGhosts"
     doc = "fixed wall-particle rows whose density evolves by pairing with fluid, T §3.8"
     wall_density_evolves = True
+
+
+class _NoSlip(Coeffs):
+    noSlip: bool = Field(True, description="wall particles enter the viscous term (no-slip, "
+                         "as in the thesis); no: free-slip")
+
+
+#: wall normal of neighbour b and the normal / tangential distances of a from it; a corner
+#: particle repels radially (its normal is the direction b -> a and chi = 1)
+_GEOMETRY = """\
+bnx = fld[F_nx, b]
+bny = fld[F_ny, b]
+if fld[F_corner, b] > 0.5:
+    rab = math.sqrt(r2)
+    bnx = dx_ab / rab
+    bny = dy_ab / rab
+    yn = rab
+    chi = 1.0
+else:
+    yn = dx_ab * bnx + dy_ab * bny
+    xt = abs(dy_ab * bnx - dx_ab * bny)
+    chi = 1.0 - xt / bnd_dx if xt < bnd_dx else 0.0
+"""
+
+#: Monaghan & Kos (1999), T(3.70)-(3.72): f = n Gamma(y) chi(x), Gamma = A (1 - q)/sqrt(q),
+#: q = y / range, A = (0.01 c0^2 + beta c0 v_n)/h with v_n the speed of approach (beta = 1 when
+#: approaching, else 0). y is floored at bnd_ymin so a particle that crossed the line is pushed
+#: back with a large but finite force.
+_MONAGHAN_KOS = _GEOMETRY + """\
+if chi > 0.0 and yn < bnd_range:
+    qn = max(yn, bnd_ymin) / bnd_range
+    vn = -(u_ab * bnx + v_ab * bny)
+    amk = bnd_a0
+    if vn > 0.0:
+        amk += bnd_c0 * vn * inv_h
+    gam = amk * (1.0 - qn) / math.sqrt(qn) * chi
+    acc_x += gam * bnx
+    acc_y += gam * bny
+"""
+
+#: Monaghan et al. (2003), T(3.73)-(3.76): f_ab = m_b/(m_a + m_b) Gamma(y) chi(x) n_b,
+#: q = y/h, beta = 0.02 c0^2 / y.
+_MONAGHAN_2003 = _GEOMETRY + """\
+if chi > 0.0 and yn < 2.0 * h:
+    ye = max(yn, bnd_ymin)
+    qn = ye * inv_h
+    bet = bnd_b0 / ye
+    if qn < 2.0 / 3.0:
+        gam = 2.0 / 3.0 * bet
+    elif qn < 1.0:
+        gam = bet * (2.0 * qn - 1.5 * qn * qn)
+    else:
+        gam = 0.5 * bet * (2.0 - qn) * (2.0 - qn)
+    ma = m[a]
+    gam *= mb / (ma + mb) * chi
+    acc_x += gam * bnx
+    acc_y += gam * bny
+"""
+
+
+class _Repulsive(Boundary):
+    wall_placement = "line"
+    wall_fields = ("nx", "ny", "corner", "wallDist")
+    force_code = ""
+
+    class Coeffs(_NoSlip):
+        pass
+
+    def fluid_body(self, full: str, viscous: str) -> str:
+        wall = (viscous + "\n" if self.coeffs.noSlip else "") + self.force_code
+        return ("if kindb == FLUID:\n" + _indent(full) + "\nelse:\n" + _indent(wall))
+
+    def density_body(self, continuity: str) -> str:
+        return "if kindb == FLUID:\n" + _indent(continuity)
+
+    def wall_body(self, continuity: str) -> str:
+        return ""
+
+    def selection_key(self) -> str:
+        return f"noSlip={self.coeffs.noSlip}"
+
+
+def _indent(code: str) -> str:
+    return "\n".join("    " + ln for ln in code.strip("\n").splitlines()) or "    pass"
+
+
+@register
+class RepulsiveMonaghanKos(_Repulsive):
+    """Monaghan & Kos (1999) repulsive wall, T(3.70)-(3.72).
+
+    One row of wall particles on the wall line, spacing dx. A wall particle b pushes a fluid
+    particle a along the wall normal with Gamma(y) chi(x): Gamma = A (1 - q)/sqrt(q) for
+    q = y / (2 dx) < 1, A = (0.01 c0^2 + beta c0 v_n) / h, where v_n is the speed at which a
+    approaches the wall (beta = 1 when approaching, 0 otherwise) and chi(x) = 1 - x/dx the
+    tangential weight T(3.76), which sums to one along a wall of particles dx apart, so the
+    force does not ripple as a particle slides along it. Wall particles take no part in
+    continuity or pressure; with ``noSlip yes`` they enter the viscous term (T §3.8).
+    """
+
+    name = "repulsiveMonaghanKos"
+    doc = "repulsive wall force of Monaghan & Kos (1999), T(3.70)-(3.72), one row on the wall"
+    force_code = _MONAGHAN_KOS
+
+    class Coeffs(_NoSlip):
+        range: float = Field(2.0, gt=0.0, le=3.0, description="reach of the force in dx "
+                             "(q = y / (range dx)); 2 in T(3.71)")
+
+    def params(self, ctx: CaseContext):
+        return {"bnd_dx": ctx.dx, "bnd_range": self.coeffs.range * ctx.dx,
+                "bnd_ymin": 0.02 * ctx.dx, "bnd_a0": 0.01 * ctx.c0 ** 2 / ctx.h,
+                "bnd_c0": ctx.c0}
+
+
+@register
+class RepulsiveMonaghan2003(_Repulsive):
+    """Monaghan, Kos & Issa (2003) repulsive wall, T(3.73)-(3.76).
+
+    Force per unit mass on fluid particle a from wall particle b:
+    f_ab = m_b/(m_a + m_b) Gamma(y) chi(x) n_b, with Gamma the kernel-gradient-like profile of
+    T(3.75) in q = y/h (zero beyond 2h), beta = 0.02 c0^2 / y, and chi(x) = 1 - x/dx, T(3.76).
+    Walls are fixed (or moved by a prescribed motion), so the reaction T(3.74) on the wall is
+    not integrated. Corners as described in the module docstring.
+    """
+
+    name = "repulsiveMonaghan2003"
+    doc = "repulsive wall force of Monaghan et al. (2003), T(3.73)-(3.76), one row on the wall"
+    force_code = _MONAGHAN_2003
+
+    def params(self, ctx: CaseContext):
+        return {"bnd_dx": ctx.dx, "bnd_ymin": 0.02 * ctx.dx, "bnd_b0": 0.02 * ctx.c0 ** 2}
+
+
+@register
+class MirrorGhosts(Boundary):
+    """Mirrored ghost particles, T(3.77)-(3.80) (Colagrossi & Landrini 2003; P §4).
+
+    Every step each fluid particle closer to a wall segment than the kernel support is
+    reflected across it: x_G = 2 x_w - x_a, p_G = p_a (rho_G = rho_a, m_G = m_a). The normal
+    velocity is reflected about the wall's, u_nG = 2 U_n - u_na, T(3.78); the tangential one is
+    kept, u_sG = u_sa (free slip, T(3.79)), or with ``noSlip yes`` reflected likewise,
+    u_sG = 2 U_s - u_sa. In the corner between two perpendicular walls a particle near both is
+    also reflected across both (the corner ghost). Ghosts follow their particle through the
+    stages of a step. Exact for straight walls and right-angled corners; at other angles only
+    the single reflections are made (T §3.8 on the limits of the method).
+    """
+
+    name = "mirrorGhosts"
+    doc = "fluid mirrored across straight walls each step, T(3.77)-(3.80); free- or no-slip"
+    wall_placement = "none"
+    ghosts = True
+
+    class Coeffs(Coeffs):
+        noSlip: bool = Field(False, description="reflect the tangential velocity too "
+                             "(no-slip); no: T(3.79), free slip as in P section 4")
+
+    def selection_key(self) -> str:
+        return f"noSlip={self.coeffs.noSlip}"
+
+
+@register
+class Hybrid(Boundary):
+    """The hybrid wet/dry boundary of T §3.9: stationary ghosts where wet, repulsive where dry.
+
+    Wall particles sit in rows behind the wall as for ``stationaryGhosts``. Once per step each
+    wall particle counts the fluid particles inside its kernel support. It is *wet* when that
+    count reaches its required number of pairs, ``ceil(wetFraction * nFull)``, where ``nFull``
+    (written by the set-up) is the number of lattice sites on the fluid side of it within the
+    support: the pairs it would form fully submerged. nFull is smaller in a corner (a 90 degree
+    fan of fluid instead of 180), which is the corner dependence of T §3.9. A wet particle
+    behaves as a stationary ghost (density evolves, pressure and viscosity act). A dry one
+    has its density reset to rho0 (zero pressure) and its continuity switched off; if it is
+    a boundary particle (the first row, closer than dx to the wall) it pushes fluid with the
+    Monaghan & Kos force T(3.71)-(3.72) acting only closer than dx and enters the viscous
+    term; deeper dry rows are ignored. The switch back happens when the count falls below the
+    requirement. (T §3.9 lets the boundary particle decide for the ghost rows behind it; here
+    each particle counts its own pairs against its own nFull, which needs no bookkeeping of
+    which row belongs to which particle; the rows behind a boundary particle switch with it
+    within a step or two.)
+    """
+
+    name = "hybrid"
+    doc = ("hybrid wet/dry boundary, T §3.9: stationary ghosts once a wall particle has its "
+           "required fluid pairs, Monaghan-Kos force within dx while dry")
+    wall_fields = ("nx", "ny", "corner", "wallDist", "nFull")
+    aux = ("bnd_wet",)
+
+    class Coeffs(_NoSlip):
+        wetFraction: float = Field(0.75, gt=0.0, le=1.0, description=(
+            "required pairs as a fraction of the fully submerged count nFull"))
+
+    def params(self, ctx: CaseContext):
+        return {"bnd_dx": ctx.dx, "bnd_range": ctx.dx, "bnd_ymin": 0.02 * ctx.dx,
+                "bnd_a0": 0.01 * ctx.c0 ** 2 / ctx.h, "bnd_c0": ctx.c0,
+                "bnd_frac": self.coeffs.wetFraction, "bnd_rho0": ctx.rho0}
+
+    def selection_key(self) -> str:
+        return f"noSlip={self.coeffs.noSlip}"
+
+    step_init = "bnd_count = 0"
+    step_pair = "if kindb == FLUID:\n    bnd_count += 1"
+    step_final = """\
+bnd_need = math.ceil(bnd_frac * fld[F_nFull, a] - 1e-9)
+if bnd_need > 0 and bnd_count >= bnd_need:
+    aux[I_bnd_wet, a] = 1.0
+else:
+    aux[I_bnd_wet, a] = 0.0
+    rho[a] = bnd_rho0
+"""
+
+    def fluid_body(self, full: str, viscous: str) -> str:
+        dry = (viscous + "\n" if self.coeffs.noSlip else "") + _MONAGHAN_KOS
+        return ("if kindb == FLUID or aux[I_bnd_wet, b] > 0.5:\n" + _indent(full) +
+                "\nelif fld[F_wallDist, b] < bnd_dx:\n" + _indent(dry))
+
+    def density_body(self, continuity: str) -> str:
+        return "if kindb == FLUID or aux[I_bnd_wet, b] > 0.5:\n" + _indent(continuity)
+
+    def wall_body(self, continuity: str) -> str:
+        return "if aux[I_bnd_wet, a] > 0.5:\n" + _indent(continuity)

@@ -83,6 +83,7 @@ class Monaghan2007(Model):
         pu, pv = sim.position_velocity(st.u, st.v)
         _monaghan_half(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho, st.kind,
                        dt0, st.u_half, st.v_half)
+        sim.move_walls(sim.time + 0.5 * dt0)
         sim.eos()
         sim.rates()                               # F^1/2
         dth = sim.time_step()
@@ -94,6 +95,7 @@ class Monaghan2007(Model):
         _monaghan_kick(st.u, st.v, st.u_half, st.v_half, st.ax, st.ay, st.kind, dt0, dt1)
         pu, pv = sim.position_velocity(st.u, st.v)
         _drift(st.x, st.y, pu, pv, 0.5 * dt1)
+        sim.move_walls(sim.time + 0.5 * (dt0 + dt1))
         # rho^1/2 + dt1/2 D^1 with D^1 from r^1, v^1 (T(3.96))
         sim.density_rate()
         _density_update(st.rho, st.drho, 0.5 * dt1)
@@ -167,11 +169,13 @@ class PredictorCorrector(Model):
         pu, pv = sim.position_velocity(st.u, st.v)   # U^k
         saved = _pc_predict(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho,
                             st.kind, dt)
+        sim.move_walls(sim.time + 0.5 * dt)
         sim.eos()
         sim.rates()                               # M^k+1/2, F^k+1/2
         pu, pv = sim.position_velocity(st.u, st.v)   # U^k+1/2
         _pc_correct(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho, st.kind,
                     dt, *saved)
+        sim.move_walls(sim.time + dt)
         sim.last_dt = dt
         return dt
 
@@ -274,6 +278,7 @@ class Verlet(Model):
         _verlet_step(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho, st.kind,
                      dt, dtv, bool(euler), ex["Ux_0"], ex["Uy_0"], ex["rho_0"], ex["deltaT_0"],
                      ex["historyTime"], sim.time + dt)
+        sim.move_walls(sim.time + dt)
         sim.last_dt = dt
         return dt
 
@@ -361,6 +366,7 @@ class Symplectic(Model):
         pu, pv = sim.position_velocity(st.u, st.v)
         saved = _symplectic_half(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho,
                                  st.kind, dt)
+        sim.move_walls(sim.time + 0.5 * dt)
         sim.eos()
         sim.rates()                               # F^n+1/2, D^n+1/2
         u0, v0, rho0, du0, dv0 = saved
@@ -368,5 +374,6 @@ class Symplectic(Model):
                                      u0, v0, rho0)
         pu, pv = sim.position_velocity(st.u, st.v)   # v^n+1 + XSPH correction at n+1/2
         _symplectic_drift(st.x, st.y, st.u, st.v, pu, pv, du0, dv0, dt)
+        sim.move_walls(sim.time + dt)
         sim.last_dt = dt
         return dt

@@ -14,8 +14,10 @@ import numpy as np
 from matplotlib.path import Path as MplPath
 from scipy.spatial import cKDTree
 
-from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict, PolygonRegion, PolylineWalls
+from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.setup.geometry import (distance_to_walls, lattice_offsets_within, line_points,
+                                    polylines_of, segments_of, wall_metadata)
 
 
 def _lattice(lo, hi, dx):
@@ -39,6 +41,7 @@ def fluid_points(region, dx):
 
 
 def wall_points(region, dx):
+    """Rows of wall particles behind a wall entry (``layers`` deep, cell centred)."""
     if isinstance(region, BoxWalls):
         L = region.layers * dx
         (x0, y0), (x1, y1) = region.min, region.max
@@ -47,7 +50,12 @@ def wall_points(region, dx):
         x, y = _lattice(lo, hi, dx)
         inside = (x > x0) & (x < x1) & (y > y0) & (y < y1)
         return x[~inside], y[~inside]
-    return polyline_points(np.asarray(region.points, float), dx, region.layers, region.side)
+    xs, ys = [], []
+    for pts, side in polylines_of(region):
+        x, y = polyline_points(np.asarray(pts, float), dx, region.layers, side)
+        xs.append(x)
+        ys.append(y)
+    return np.concatenate(xs), np.concatenate(ys)
 
 
 def polyline_points(pts, dx, layers, side):
@@ -83,22 +91,47 @@ def local_surface(xf, yf, dx):
     return top[col] + 0.5 * dx
 
 
-def generate(pd: ParticleDict, ctx, eos) -> ParticleState:
-    """Particles of a case at rest in hydrostatic equilibrium."""
+def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | None = None,
+             moving: bool = False) -> ParticleState:
+    """Particles of a case at rest in hydrostatic equilibrium.
+
+    ``boundary`` (the selected boundary model) decides where wall particles go
+    (``wall_placement``: rows behind the walls, one row on them, or none) and which per-wall-
+    particle fields are stored (``wall_fields``: normal, distance behind the wall, corner
+    flag, fully-wet pair count ``nFull`` for a support of ``support_radius``). ``moving``
+    adds the wall entry index ``patch`` and the initial positions ``x0, y0`` that prescribed
+    motions displace.
+    """
     dx = pd.dx
+    placement = getattr(boundary, "wall_placement", "rows")
+    segs = segments_of(pd)
     fx, fy = zip(*(fluid_points(r, dx) for r in pd.fluid.values()))
     xf, yf = np.concatenate(fx), np.concatenate(fy)
-    if pd.walls:
-        wx, wy = zip(*(wall_points(r, dx) for r in pd.walls.values()))
-        xw, yw = np.concatenate(wx), np.concatenate(wy)
-        uw = np.concatenate([np.full(len(a), r.velocity[0]) for a, r in zip(wx, pd.walls.values())])
-        vw = np.concatenate([np.full(len(a), r.velocity[1]) for a, r in zip(wx, pd.walls.values())])
+    walls = list(pd.walls.values())
+    if walls and placement != "none":
+        if placement == "rows":
+            pieces = [wall_points(r, dx) for r in walls]
+        else:
+            pieces = [line_points([sg for sg in segs if sg.patch == i], dx)
+                      for i in range(len(walls))]
+        xw = np.concatenate([p[0] for p in pieces])
+        yw = np.concatenate([p[1] for p in pieces])
+        pw = np.concatenate([np.full(len(p[0]), i) for i, p in enumerate(pieces)])
+        keep = _first_of_duplicates(xw, yw, 0.5 * dx)
+        xw, yw, pw = xw[keep], yw[keep], pw[keep]
+        uw = np.array([walls[i].velocity[0] for i in pw])
+        vw = np.array([walls[i].velocity[1] for i in pw])
     else:
         xw = yw = uw = vw = np.zeros(0)
+        pw = np.zeros(0, dtype=np.int64)
     if xw.size and xf.size:
         # fluid never overlaps walls: drop fluid particles closer than dx/2 to a wall particle
         d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]))
         xf, yf = xf[d >= 0.5 * dx], yf[d >= 0.5 * dx]
+    if segs and xf.size:
+        # ... or to a wall line (walls without particles, e.g. mirrored ghosts)
+        d = distance_to_walls(segs, xf, yf)
+        xf, yf = xf[d >= 0.5 * dx * (1 - 1e-6)], yf[d >= 0.5 * dx * (1 - 1e-6)]
     if xf.size == 0:
         raise ValueError("system/particleDict: fluid regions produce no particles at this dx")
     gdown = max(-float(ctx.g[1]), 0.0)   # hydrostatic along -y only (a body force along x,
@@ -116,7 +149,46 @@ def generate(pd: ParticleDict, ctx, eos) -> ParticleState:
     kind = np.concatenate([np.full(xf.size, FLUID), np.full(xw.size, WALL)])
     u = np.concatenate([np.zeros(xf.size), uw])
     v = np.concatenate([np.zeros(xf.size), vw])
-    return ParticleState(x, y, u, v, rho, rho * dx * dx, kind)
+    extra = {}
+    # the distance behind the wall is always written: it records how the walls were set up
+    wanted = set(getattr(boundary, "wall_fields", ())) | {"wallDist"}
+    if wanted and xw.size:
+        nx, ny, dist, corner, _ = wall_metadata(segs, xw, yw, dx)
+        meta = {"nx": nx, "ny": ny, "wallDist": dist, "corner": corner}
+        if "nFull" in wanted:
+            meta["nFull"] = full_pairs(xw, yw, dx, support_radius)
+        for k in wanted:
+            extra[k] = np.concatenate([np.zeros(xf.size), meta[k]])
+    if moving:
+        extra["patch"] = np.concatenate([np.full(xf.size, -1.0), pw.astype(float)])
+        extra["x0"] = x.copy()
+        extra["y0"] = y.copy()
+    return ParticleState(x, y, u, v, rho, rho * dx * dx, kind, extra=extra)
+
+
+def _first_of_duplicates(x, y, r):
+    """Mask keeping the first of any points closer than ``r`` (walls of two entries that
+    meet, e.g. a slope starting on a tank's bed)."""
+    keep = np.ones(x.size, bool)
+    if x.size == 0:
+        return keep
+    pairs = cKDTree(np.column_stack([x, y])).query_pairs(r, output_type="ndarray")
+    for i, j in pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))] if len(pairs) else ():
+        if keep[i]:
+            keep[j] = False
+    return keep
+
+
+def full_pairs(xw, yw, dx, support_radius):
+    """Pairs a wall particle would form with fluid if submerged: the lattice sites within
+    the kernel support minus the wall particles there (fewer in a corner, T §3.9)."""
+    if support_radius is None:
+        raise ValueError("full_pairs needs the kernel support radius")
+    total = lattice_offsets_within(support_radius / dx)
+    tree = cKDTree(np.column_stack([xw, yw]))
+    walls = np.array([len(nb) - 1 for nb in tree.query_ball_point(
+        np.column_stack([xw, yw]), support_radius * (1 - 1e-9))])
+    return np.maximum(total - walls, 0).astype(float)
 
 
 def default_domain(pd: ParticleDict):
@@ -131,7 +203,8 @@ def default_domain(pd: ParticleDict):
         pts += [r.min, r.max] if isinstance(r, BoxRegion) else list(r.points)
     for w in pd.walls.values():
         L = w.layers * pd.dx
-        corners = [w.min, w.max] if isinstance(w, BoxWalls) else list(w.points)
+        corners = [w.min, w.max] if isinstance(w, BoxWalls) else \
+            [p for pts, _ in polylines_of(w) for p in pts]
         pts += [(c[0] + sx * L, c[1] + sy * L) for c in corners for sx in (-1, 1) for sy in (-1, 1)]
     pts = np.asarray(pts, float)
     lo, hi = pts.min(axis=0), pts.max(axis=0)

@@ -1,0 +1,135 @@
+"""Mirrored ghost particles, T(3.77)-(3.80): creation each step, refresh at every stage.
+
+Wall segments are passed as a (S, 9) array: p0x, p0y, tx, ty, nx, ny, L, Ux, Uy (start
+point, unit tangent, unit normal into the fluid, length, wall velocity). ``corners`` is a
+(K, 2) int array of perpendicular segment pairs sharing a vertex. A fluid particle within
+``reach`` of a segment (on its fluid side, projecting onto it) gets one ghost per such
+segment, and one more per corner whose two segments both qualify.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+_JIT = dict(cache=True, fastmath=True)
+
+
+@njit(**_JIT, inline="always")
+def _near(xa, ya, seg, s, reach):
+    rx = xa - seg[s, 0]
+    ry = ya - seg[s, 1]
+    t = rx * seg[s, 2] + ry * seg[s, 3]
+    d = rx * seg[s, 4] + ry * seg[s, 5]
+    return d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]
+
+
+@njit(parallel=True, **_JIT)
+def count_ghosts(x, y, kind, seg, corners, reach, count):
+    for a in prange(x.shape[0]):
+        k = 0
+        if kind[a] == 0:
+            for s in range(seg.shape[0]):
+                if _near(x[a], y[a], seg, s, reach):
+                    k += 1
+            for c in range(corners.shape[0]):
+                if _near(x[a], y[a], seg, corners[c, 0], reach) and \
+                        _near(x[a], y[a], seg, corners[c, 1], reach):
+                    k += 1
+        count[a] = k
+
+
+@njit(parallel=True, **_JIT)
+def fill_ghosts(x, y, kind, seg, corners, reach, offset, src, s1, s2):
+    """Ghost j mirrors particle ``src[j]`` across segment ``s1[j]`` (and ``s2[j]`` >= 0)."""
+    for a in prange(x.shape[0]):
+        if kind[a] != 0:
+            continue
+        j = offset[a]
+        for s in range(seg.shape[0]):
+            if _near(x[a], y[a], seg, s, reach):
+                src[j] = a
+                s1[j] = s
+                s2[j] = -1
+                j += 1
+        for c in range(corners.shape[0]):
+            if _near(x[a], y[a], seg, corners[c, 0], reach) and \
+                    _near(x[a], y[a], seg, corners[c, 1], reach):
+                src[j] = a
+                s1[j] = corners[c, 0]
+                s2[j] = corners[c, 1]
+                j += 1
+
+
+@njit(**_JIT, inline="always")
+def _reflect_point(px, py, seg, s):
+    """T(3.77): x_G = 2 x_w - x_a, x_w the foot of the normal on the wall line."""
+    d = (px - seg[s, 0]) * seg[s, 4] + (py - seg[s, 1]) * seg[s, 5]
+    return px - 2.0 * d * seg[s, 4], py - 2.0 * d * seg[s, 5]
+
+
+@njit(**_JIT, inline="always")
+def _reflect_velocity(u, v, seg, s, no_slip):
+    """T(3.78)-(3.79): u_nG = 2 U_n - u_n; u_sG = u_s (free slip) or 2 U_s - u_s (no-slip)."""
+    if no_slip:
+        return 2.0 * seg[s, 7] - u, 2.0 * seg[s, 8] - v
+    un = (u - seg[s, 7]) * seg[s, 4] + (v - seg[s, 8]) * seg[s, 5]
+    return u - 2.0 * un * seg[s, 4], v - 2.0 * un * seg[s, 5]
+
+
+@njit(parallel=True, **_JIT)
+def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip):
+    """Position, velocity, density (p_G = p_a, T(3.80)) and mass of every ghost from its
+    particle's current state."""
+    for j in prange(gidx.shape[0]):
+        g = gidx[j]
+        a = src[j]
+        px, py = _reflect_point(x[a], y[a], seg, s1[j])
+        gu, gv = _reflect_velocity(u[a], v[a], seg, s1[j], no_slip)
+        if s2[j] >= 0:
+            px, py = _reflect_point(px, py, seg, s2[j])
+            if no_slip:
+                # relative to the mean velocity of the two walls: zero relative velocity there
+                gu = seg[s1[j], 7] + seg[s2[j], 7] - u[a]
+                gv = seg[s1[j], 8] + seg[s2[j], 8] - v[a]
+            else:
+                gu, gv = _reflect_velocity(gu, gv, seg, s2[j], False)
+        x[g] = px
+        y[g] = py
+        u[g] = gu
+        v[g] = gv
+        rho[g] = rho[a]
+        m[g] = m[a]
+
+
+def segment_array(segments, offsets=None, velocities=None) -> np.ndarray:
+    """The (S, 9) array of :mod:`sphfoam.engine.ghosts` from :class:`Segment` s, each moved by
+    ``offsets[patch]`` and moving with ``velocities[patch]`` (both optional dicts)."""
+    out = np.zeros((len(segments), 9))
+    for i, s in enumerate(segments):
+        ox, oy = (offsets or {}).get(s.patch, (0.0, 0.0))
+        ux, uy = (velocities or {}).get(s.patch, (0.0, 0.0))
+        tx, ty = s.tangent
+        out[i] = (s.p0[0] + ox, s.p0[1] + oy, tx, ty, s.normal[0], s.normal[1], s.length, ux, uy)
+    return out
+
+
+def corner_pairs(segments, tol: float) -> np.ndarray:
+    """Pairs of perpendicular segments that share an end point and enclose the fluid."""
+    pairs = []
+    for i, a in enumerate(segments):
+        for j in range(i + 1, len(segments)):
+            b = segments[j]
+            if abs(a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1]) > 1e-6:
+                continue
+            shared = [p for p in (a.p0, a.p1) for q in (b.p0, b.p1)
+                      if abs(p[0] - q[0]) < tol and abs(p[1] - q[1]) < tol]
+            if not shared:
+                continue
+            # the fluid is enclosed (concave corner) when each normal points along the
+            # other segment, away from the shared vertex
+            v = shared[0]
+            other_b = b.p1 if abs(b.p0[0] - v[0]) < tol and abs(b.p0[1] - v[1]) < tol else b.p0
+            if (other_b[0] - v[0]) * a.normal[0] + (other_b[1] - v[1]) * a.normal[1] > 0:
+                pairs.append((i, j))
+    return np.array(pairs, dtype=np.int64).reshape(-1, 2)

@@ -1,0 +1,156 @@
+"""Prescribed wall motion (``motion { type ...; }`` of a wall in ``system/particleDict``).
+
+A motion is a rigid translation d(t) of one wall entry: its particles sit at x0 + d(t) and
+move with d'(t) at every stage of every step (the integrators ask for the stage time), and a
+mirrored-ghost wall segment moves likewise. d(0) need not be zero; set-up places the wall at
+its particleDict position, which is the position at t = 0.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from sphfoam import registry
+from sphfoam.case.schemas import Vector2
+from sphfoam.registry import Coeffs, Model, register
+
+
+class Motion(Model):
+    family = "motion"
+
+    def resolve(self, case_path: Path) -> None:
+        """Load whatever the motion reads from the case (e.g. a table file)."""
+
+    def displacement(self, t: float) -> tuple[float, float]:
+        raise NotImplementedError
+
+    def velocity(self, t: float) -> tuple[float, float]:
+        raise NotImplementedError
+
+
+@register
+class PistonPaddle(Motion):
+    """A piston wave paddle: the wall translates along ``direction`` by the trajectory X(t)
+    of a named wave maker (``sphfoam models waveMaker``)."""
+
+    name = "pistonPaddle"
+    doc = "piston wave paddle moving along a direction by a wave maker's X(t)"
+
+    class Coeffs(Coeffs):
+        direction: Vector2 = Field((1.0, 0.0), description="direction of the stroke")
+        waveMaker: dict[str, Any] = Field(description="{ type <waveMaker>; coeffs }")
+
+        @field_validator("direction")
+        @classmethod
+        def _unit(cls, v):
+            n = float(np.hypot(*v))
+            if n == 0:
+                raise ValueError("direction must not be zero")
+            return (v[0] / n, v[1] / n)
+
+        @field_validator("waveMaker")
+        @classmethod
+        def _known(cls, v):
+            if "type" not in v:
+                raise ValueError("needs a 'type'; registered: "
+                                 + ", ".join(registry.names("waveMaker")))
+            try:
+                registry.build("waveMaker", v)
+            except registry.UnknownModel as e:
+                raise ValueError(str(e)) from None
+            return v
+
+    def __init__(self, coeffs=None):
+        super().__init__(coeffs)
+        self.maker = registry.build("waveMaker", self.coeffs.waveMaker)
+
+    def displacement(self, t):
+        X = self.maker.position(t)
+        d = self.coeffs.direction
+        return (X * d[0], X * d[1])
+
+    def velocity(self, t):
+        U = self.maker.velocity(t)
+        d = self.coeffs.direction
+        return (U * d[0], U * d[1])
+
+
+@register
+class DisplacementTable(Motion):
+    """A displacement table: rows (t (dx dy)) inline in ``table`` or columns ``t dx dy`` in
+    ``file`` (relative to the case), interpolated linearly (velocity piecewise constant, as
+    OpenFOAM's tables) or by a C2 cubic spline; before the first and after the last time the
+    wall holds still at the end values."""
+
+    name = "displacementTable"
+    doc = "rigid displacement interpolated from a table of (t (dx dy)), inline or from a file"
+
+    class Coeffs(Coeffs):
+        table: list[tuple[float, Vector2]] | None = Field(None, description="( (t (dx dy)) ... )")
+        file: str | None = Field(None, description="file with columns t dx dy, relative to "
+                                 "the case")
+        interpolation: Literal["linear", "spline"] = "linear"
+
+        @model_validator(mode="after")
+        def _one(self):
+            if (self.table is None) == (self.file is None):
+                raise ValueError("give exactly one of 'table' and 'file'")
+            if self.table is not None:
+                t = [r[0] for r in self.table]
+                if len(t) < 2 or any(b <= a for a, b in zip(t, t[1:])):
+                    raise ValueError("table needs at least two rows with strictly increasing t")
+            return self
+
+    def __init__(self, coeffs=None):
+        super().__init__(coeffs)
+        c = self.coeffs
+        self._data = None
+        if c.table is not None:
+            self._set(np.array([[t, d[0], d[1]] for t, d in c.table], float), "table")
+
+    def _set(self, data: np.ndarray, where: str):
+        if data.ndim != 2 or data.shape[1] != 3 or data.shape[0] < 2:
+            raise ValueError(f"{where}: needs at least two rows of t dx dy")
+        if np.any(np.diff(data[:, 0]) <= 0):
+            raise ValueError(f"{where}: times must increase strictly")
+        self._data = data
+        if self.coeffs.interpolation == "spline":
+            from scipy.interpolate import CubicSpline
+
+            self._spline = CubicSpline(data[:, 0], data[:, 1:], axis=0, bc_type="natural")
+
+    def resolve(self, case_path: Path) -> None:
+        if self.coeffs.file is None:
+            return
+        f = Path(case_path) / self.coeffs.file
+        if not f.is_file():
+            raise FileNotFoundError(f"{self.coeffs.file}: no such file in the case")
+        self._set(np.loadtxt(f, ndmin=2, comments=("#", "//")), self.coeffs.file)
+
+    def _clamp(self, t):
+        d = self._data
+        if d is None:
+            raise RuntimeError("displacementTable: file not loaded (resolve the case first)")
+        return min(max(t, d[0, 0]), d[-1, 0]), t <= d[0, 0] or t >= d[-1, 0]
+
+    def displacement(self, t):
+        tc, _ = self._clamp(t)
+        d = self._data
+        if self.coeffs.interpolation == "spline":
+            return tuple(float(v) for v in self._spline(tc))
+        return (float(np.interp(tc, d[:, 0], d[:, 1])), float(np.interp(tc, d[:, 0], d[:, 2])))
+
+    def velocity(self, t):
+        tc, outside = self._clamp(t)
+        if outside:
+            return (0.0, 0.0)
+        d = self._data
+        if self.coeffs.interpolation == "spline":
+            return tuple(float(v) for v in self._spline(tc, 1))
+        i = int(np.clip(np.searchsorted(d[:, 0], tc, side="right") - 1, 0, len(d) - 2))
+        dt = d[i + 1, 0] - d[i, 0]
+        return ((d[i + 1, 1] - d[i, 1]) / dt, (d[i + 1, 2] - d[i, 2]) / dt)

@@ -1,0 +1,193 @@
+"""Wall geometry of ``system/particleDict`` as straight segments with normals.
+
+Every wall entry (a tank ``box``, a ``polyline`` or a ``slope``) becomes a list of
+:class:`Segment` s whose unit normal points *into the fluid*. The boundary models use them in
+two ways: particle boundaries (repulsive, stationary ghosts, hybrid) place wall particles along
+them and store, per wall particle, the normal of the nearest wall point, its distance behind
+the wall and whether that point is a corner; mirrored ghosts (T(3.77)-(3.80)) reflect fluid
+particles across the segments themselves, every step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sphfoam.case.schemas import BoxWalls, ParticleDict, SlopeWalls
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A straight piece of wall from ``p0`` to ``p1``; ``normal`` points into the fluid."""
+
+    p0: tuple[float, float]
+    p1: tuple[float, float]
+    normal: tuple[float, float]
+    patch: int                 # index of the particleDict wall entry it belongs to
+
+    @property
+    def length(self) -> float:
+        return math.hypot(self.p1[0] - self.p0[0], self.p1[1] - self.p0[1])
+
+    @property
+    def tangent(self) -> tuple[float, float]:
+        L = self.length
+        return ((self.p1[0] - self.p0[0]) / L, (self.p1[1] - self.p0[1]) / L)
+
+
+def polylines_of(region) -> list[tuple[list[tuple[float, float]], str]]:
+    """A wall entry as polylines (vertex lists) and the side their solid lies on."""
+    if isinstance(region, BoxWalls):
+        (x0, y0), (x1, y1) = region.min, region.max
+        # counter-clockwise from the bottom-left corner: the solid lies on the right
+        loop = [("bottom", (x0, y0), (x1, y0)), ("right", (x1, y0), (x1, y1)),
+                ("top", (x1, y1), (x0, y1)), ("left", (x0, y1), (x0, y0))]
+        if not region.open:
+            return [([a for _, a, _ in loop] + [loop[0][1]], "right")]
+        k = next(i for i, s in enumerate(loop) if s[0] in region.open)
+        loop = loop[k + 1:] + loop[:k + 1]          # start just after an open side
+        chains, cur = [], []
+        for name, a, b in loop:
+            if name in region.open:
+                if cur:
+                    chains.append(cur)
+                cur = []
+            else:
+                cur = cur or [a]
+                cur.append(b)
+        if cur:
+            chains.append(cur)
+        return [(c, "right") for c in chains]
+    if isinstance(region, SlopeWalls):
+        ang = math.radians(region.angle)
+        x0, y0 = region.start
+        return [([(x0, y0), (x0 + region.length * math.cos(ang),
+                             y0 + region.length * math.sin(ang))], "right")]
+    return [([tuple(p) for p in region.points], region.side)]
+
+
+def segments_of(pd: ParticleDict) -> list[Segment]:
+    """All wall segments of a case, normals into the fluid."""
+    segs: list[Segment] = []
+    for patch, region in enumerate(pd.walls.values()):
+        for pts, side in polylines_of(region):
+            # the normal into the solid is the left normal (-ty, tx) if the solid is on the left
+            sgn = 1.0 if side == "left" else -1.0
+            for a, b in zip(pts[:-1], pts[1:]):
+                if a == b:
+                    continue
+                L = math.hypot(b[0] - a[0], b[1] - a[1])
+                tx, ty = (b[0] - a[0]) / L, (b[1] - a[1]) / L
+                segs.append(Segment(tuple(a), tuple(b), (sgn * ty, -sgn * tx), patch))
+    return segs
+
+
+def _closest(segs: list[Segment], x: np.ndarray, y: np.ndarray):
+    """Nearest point on any segment: distance, point, segment index, whether it is an end."""
+    best = np.full(x.size, np.inf)
+    qx = np.zeros(x.size)
+    qy = np.zeros(x.size)
+    which = np.full(x.size, -1)
+    at_end = np.zeros(x.size, bool)
+    for i, s in enumerate(segs):
+        tx, ty = s.tangent
+        L = s.length
+        t = (x - s.p0[0]) * tx + (y - s.p0[1]) * ty
+        tc = np.clip(t, 0.0, L)
+        px, py = s.p0[0] + tc * tx, s.p0[1] + tc * ty
+        d = np.hypot(x - px, y - py)
+        better = d < best - 1e-12 * max(L, 1.0)
+        best = np.where(better, d, best)
+        qx = np.where(better, px, qx)
+        qy = np.where(better, py, qy)
+        which = np.where(better, i, which)
+        at_end = np.where(better, (tc <= 1e-9 * L) | (tc >= L * (1 - 1e-9)), at_end)
+    return best, qx, qy, which, at_end
+
+
+def distance_to_walls(segs: list[Segment], x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Distance of each point to the nearest wall segment."""
+    return _closest(segs, x, y)[0]
+
+
+def vertex_normals(segs: list[Segment], tol: float) -> dict[tuple[float, float], tuple]:
+    """Pseudo-normal (normalised sum of the adjacent normals) at every segment end, and
+    whether the end is a corner (two segments meeting at an angle)."""
+    ends: dict[tuple[float, float], list] = {}
+    for s in segs:
+        for p in (s.p0, s.p1):
+            key = (round(p[0] / tol) * tol, round(p[1] / tol) * tol)
+            ends.setdefault(key, []).append(s.normal)
+    out = {}
+    for key, normals in ends.items():
+        nx = sum(n[0] for n in normals)
+        ny = sum(n[1] for n in normals)
+        L = math.hypot(nx, ny) or 1.0
+        corner = len(normals) > 1 and any(
+            abs(n[0] * normals[0][1] - n[1] * normals[0][0]) > 1e-6 for n in normals[1:])
+        out[key] = ((nx / L, ny / L), corner)
+    return out
+
+
+def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
+    """Per wall particle: unit normal into the fluid (nx, ny), distance behind the wall,
+    corner flag (nearest wall point is a corner vertex) and patch index."""
+    d, qx, qy, which, at_end = _closest(segs, x, y)
+    nx = np.zeros(x.size)
+    ny = np.zeros(x.size)
+    corner = np.zeros(x.size)
+    vnorm = vertex_normals(segs, 1e-6 * dx)
+    tol = 1e-6 * dx
+    for k in range(x.size):
+        s = segs[which[k]]
+        if at_end[k]:
+            key = (round(qx[k] / tol) * tol, round(qy[k] / tol) * tol)
+            (vx, vy), is_corner = vnorm.get(key, (s.normal, False))
+            corner[k] = 1.0 if is_corner else 0.0
+            if d[k] > 1e-9 * dx and is_corner:
+                # behind a corner: the direction to the corner (the bisector in the limit)
+                nx[k], ny[k] = (qx[k] - x[k]) / d[k], (qy[k] - y[k]) / d[k]
+                continue
+            if is_corner:
+                nx[k], ny[k] = vx, vy
+                continue
+        nx[k], ny[k] = s.normal
+    patch = np.array([segs[i].patch for i in which], dtype=float)
+    return nx, ny, d, corner, patch
+
+
+def line_points(segs: list[Segment], dx: float):
+    """One row of particles *on* the wall lines, spacing about dx, vertices included
+    (the repulsive boundaries of Monaghan & Kos 1999 and Monaghan et al. 2003)."""
+    xs, ys = [], []
+    for s in segs:
+        n = max(1, int(round(s.length / dx)))
+        t = np.linspace(0.0, 1.0, n + 1)
+        xs.append(s.p0[0] + t * (s.p1[0] - s.p0[0]))
+        ys.append(s.p0[1] + t * (s.p1[1] - s.p0[1]))
+    return dedupe(np.concatenate(xs), np.concatenate(ys), 0.5 * dx)
+
+
+def dedupe(x: np.ndarray, y: np.ndarray, r: float):
+    """Drop the later of any two points closer than ``r``."""
+    from scipy.spatial import cKDTree
+
+    if x.size == 0:
+        return x, y
+    keep = np.ones(x.size, bool)
+    pairs = cKDTree(np.column_stack([x, y])).query_pairs(r, output_type="ndarray")
+    for i, j in pairs[np.argsort(pairs[:, 0])] if len(pairs) else ():
+        if keep[i]:
+            keep[j] = False
+    return x[keep], y[keep]
+
+
+def lattice_offsets_within(radius_in_dx: float) -> int:
+    """Number of lattice sites (excluding the centre) closer than ``radius`` (in units of
+    dx) to a site: the pairs a particle forms inside a fully wet, lattice-filled support."""
+    n = int(math.ceil(radius_in_dx)) + 1
+    i, j = np.meshgrid(np.arange(-n, n + 1), np.arange(-n, n + 1))
+    r2 = i * i + j * j
+    return int(np.count_nonzero((r2 > 0) & (r2 < radius_in_dx ** 2 - 1e-9)))
