@@ -159,10 +159,8 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
         problem = "the particles include wall particles, which mirrorGhosts does not use"
     elif walls.any() and "wallDist" in state.extra:
         d = state.extra["wallDist"][walls]
-        if bnd.wall_placement == "line" and d.max() > 1e-6 * pd.dx:
-            problem = "the wall particles lie behind the walls, not on them"
-        if bnd.wall_placement == "rows" and d.min() < 0.25 * pd.dx:
-            problem = "the wall particles lie on the walls, not in rows behind them"
+        if bnd.wall_layers == 1 and d.max() > 0.75 * pd.dx:
+            problem = "there is more than one row of wall particles"
     if problem:
         raise CaseError.single(SPH_PROPERTIES, "boundary.type",
                                f"{problem}: they were set up for another boundary; run "

