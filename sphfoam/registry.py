@@ -32,6 +32,7 @@ FAMILIES: dict[str, str] = {
     "integrator": "time-marching scheme",
     "motion": "prescribed motion of a wall (particleDict walls.<name>.motion)",
     "waveMaker": "paddle trajectory X(t) of a wave maker (pistonPaddle waveMaker)",
+    "waveTheory": "solitary-wave theory: surface, velocity, pressure and celerity",
     "functionObject": "in-run and post-processing sampling",
 }
 

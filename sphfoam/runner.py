@@ -23,7 +23,7 @@ from sphfoam.case.times import list_times, time_name
 from sphfoam.engine.codegen import Selection, build_pipeline
 from sphfoam.engine.simulation import Simulation
 from sphfoam.case.case import SPH_PROPERTIES
-from sphfoam.engine.state import WALL, ParticleState
+from sphfoam.engine.state import GHOST, WALL, ParticleState
 from sphfoam.setup.geometry import segments_of
 from sphfoam.io.fields import has_particles, read_state, write_state
 from sphfoam.setup.particles import default_domain, generate
@@ -71,7 +71,8 @@ def setup_case(case: Case, log=print) -> ParticleState:
     eos = sph["equationOfState"]
     state = generate(case.particles, case.context, eos, boundary=sph["boundary"],
                      support_radius=sph["kernel"].support * case.context.h,
-                     moving=bool(case.models.motions))
+                     moving=bool(case.models.motions),
+                     waves=list(case.waves.values()))
     sim_p = eos.B(case.context) * ((state.rho / case.context.rho0) ** eos.coeffs.gamma - 1.0)
     write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
     log(f"setup: {state.n_fluid} fluid + {state.n - state.n_fluid} wall particles "
@@ -264,14 +265,15 @@ def _run(case, c, log, progress, t_end) -> RunReport:
         bar.close()
         report.run_seconds = wallclock.perf_counter() - wall0
         report.end_time = sim.time
-        report.particles = sim.state.n
+        report.particles = int(np.count_nonzero(sim.state.kind != GHOST))
         report.removed = sum(r.count for r in sim.removals)
         report.written = [p.name for p in written]
         for fo in functions.values():
             fo.end()
     log(f"end: time {sim.time:.6g} after {report.steps} steps in {report.run_seconds:.2f} s "
         f"({report.particle_steps_per_second:.3g} particle-steps/s); "
-        f"removed {report.removed} particle(s)")
+        f"removed {report.removed} particle(s)"
+        + (f"; {sim.pushed_back} put back across a mirror wall" if sim.pushed_back else ""))
     return report
 
 

@@ -200,7 +200,7 @@ def reference_rates(setup: Setup, x, y, u, v, rho, m, kind):
         vx, vy = lam * uab, lam * vab
     else:
         vx = vy = np.zeros_like(dx)
-    sig = np.abs(h * vdotr / r2)
+    sig = np.abs(h * vdotr / (r2 + setup.eta2))       # T(3.89) with Monaghan's eta^2
 
     fluid = kind[a] == 0
     ax = np.zeros(n)

@@ -26,7 +26,7 @@ from sphfoam import registry
 from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
 from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, ParticleDict, SphSchemes,
-                                  TransportProperties)
+                                  TransportProperties, WaveProperties)
 from sphfoam.models.base import CaseContext
 
 FILES = {
@@ -35,6 +35,7 @@ FILES = {
     "particleDict": ("system/particleDict", ParticleDict),
     "transportProperties": ("constant/transportProperties", TransportProperties),
     "g": ("constant/g", Gravity),
+    "waveProperties": ("constant/waveProperties", WaveProperties),
 }
 SPH_PROPERTIES = "constant/sphProperties"
 
@@ -104,6 +105,26 @@ class Case:
     @cached_property
     def gravity(self) -> tuple[float, float]:
         return self._validated("g").value
+
+    @cached_property
+    def waves(self) -> dict:
+        """Initial solitary waves of ``constant/waveProperties`` (optional): name ->
+        (InitialWave, theory model)."""
+        rel = FILES["waveProperties"][0]
+        if not (self.path / rel).is_file():
+            return {}
+        props = self._validated("waveProperties")
+        out, problems = {}, []
+        for name, w in props.waves.items():
+            mdl = self._build("waveTheory", {"type": w.theory}, rel, f"waves.{name}.theory",
+                              problems)
+            if mdl is not None:
+                out[name] = (w, mdl)
+        if problems:
+            # the theory key is a word, not a sub-dictionary: report it as such
+            raise CaseError([Problem(p.file, p.key.removesuffix(".type"), p.message)
+                             for p in problems])
+        return out
 
     # --- models --------------------------------------------------------------------------
     @cached_property
@@ -192,7 +213,8 @@ class Case:
     def validate(self) -> None:
         """Read and validate every dictionary, collecting all problems into one error."""
         problems: list[Problem] = []
-        for attr in ("control", "schemes", "particles", "transport", "gravity", "models"):
+        for attr in ("control", "schemes", "particles", "transport", "gravity", "models",
+                     "waves"):
             try:
                 getattr(self, attr)
             except CaseError as e:

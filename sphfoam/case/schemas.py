@@ -240,3 +240,21 @@ class ParticleDict(Strict):
     domain: Domain | None = Field(None, description=(
         "particles leaving this box are removed (and reported); default: the box around all "
         "initial particles, enlarged by half its size upwards and 10 dx elsewhere"))
+
+
+# --- constant/waveProperties ---------------------------------------------------------------
+class InitialWave(Strict):
+    """A solitary wave placed in the still water at t = 0 (P §4)."""
+
+    theory: str = Field(description="wave theory (sphfoam models waveTheory), e.g. mcCowan")
+    height: float = Field(gt=0, description="wave height A above the still water level (m)")
+    x0: float = Field(description="crest position at t = 0 (m)")
+    direction: Literal[1, -1] = Field(1, description="+1: travelling towards +x; -1: -x")
+
+
+class WaveProperties(Strict):
+    """Initial solitary waves: each box fluid region of particleDict is filled column by
+    column up to its top (the still water level) plus the sum of the waves' elevations."""
+
+    waves: dict[str, InitialWave] = Field(default_factory=dict, description=(
+        "named waves, each { theory ...; height ...; x0 ...; direction 1; }"))

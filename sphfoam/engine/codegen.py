@@ -145,8 +145,10 @@ pa = p[a]
 ca = c[a]
 """
 
+#: T(3.89) with the (0.1 h)^2 guard of Monaghan (1992) that T(3.32) uses: without it a pair
+#: closing to r -> 0 (a particle meeting its own mirror image at a wall) collapses the step
 _SIGMA = """\
-s_ab = abs(h * vdotr / r2)
+s_ab = abs(h * vdotr / (r2 + eta2))
 if s_ab > sigma_a:
     sigma_a = s_ab
 """

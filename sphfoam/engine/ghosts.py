@@ -61,6 +61,32 @@ def fill_ghosts(x, y, kind, seg, corners, reach, offset, src, s1, s2):
                 j += 1
 
 
+@njit(parallel=True, **_JIT)
+def push_back(x, y, u, v, kind, seg, reach):
+    """A fluid particle that has crossed a wall line within ``reach`` behind it (a step too
+    long near an impermeable mirror wall, where the particle's own ghost pushes it with a
+    kernel gradient that vanishes as it reaches the line) is reflected back with its
+    normal velocity relative to the wall reversed. Returns how many were."""
+    count = 0
+    for a in prange(x.shape[0]):
+        if kind[a] != 0:
+            continue
+        for s in range(seg.shape[0]):
+            rx = x[a] - seg[s, 0]
+            ry = y[a] - seg[s, 1]
+            t = rx * seg[s, 2] + ry * seg[s, 3]
+            d = rx * seg[s, 4] + ry * seg[s, 5]
+            if d <= 0.0 and d > -reach and t >= 0.0 and t <= seg[s, 6]:
+                x[a] -= 2.0 * d * seg[s, 4]
+                y[a] -= 2.0 * d * seg[s, 5]
+                un = (u[a] - seg[s, 7]) * seg[s, 4] + (v[a] - seg[s, 8]) * seg[s, 5]
+                if un < 0.0:
+                    u[a] -= 2.0 * un * seg[s, 4]
+                    v[a] -= 2.0 * un * seg[s, 5]
+                count += 1
+    return count
+
+
 @njit(**_JIT, inline="always")
 def _reflect_point(px, py, seg, s):
     """T(3.77): x_G = 2 x_w - x_a, x_w the foot of the normal on the wall line."""
@@ -115,21 +141,27 @@ def segment_array(segments, offsets=None, velocities=None) -> np.ndarray:
 
 
 def corner_pairs(segments, tol: float) -> np.ndarray:
-    """Pairs of perpendicular segments that share an end point and enclose the fluid."""
+    """Pairs of perpendicular segments that meet (at an end or a T-junction, e.g. a paddle
+    standing on the bed) and enclose the fluid: each extends from the meeting point C to
+    the fluid side of the other."""
     pairs = []
     for i, a in enumerate(segments):
         for j in range(i + 1, len(segments)):
             b = segments[j]
             if abs(a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1]) > 1e-6:
                 continue
-            shared = [p for p in (a.p0, a.p1) for q in (b.p0, b.p1)
-                      if abs(p[0] - q[0]) < tol and abs(p[1] - q[1]) < tol]
-            if not shared:
+            # C: a.p0 + s ta = b.p0 + r tb
+            ta, tb = np.array(a.tangent), np.array(b.tangent)
+            m = np.array([ta, -tb]).T
+            s_, r_ = np.linalg.solve(m, np.array(b.p0) - np.array(a.p0))
+            if not (-tol <= s_ <= a.length + tol and -tol <= r_ <= b.length + tol):
                 continue
-            # the fluid is enclosed (concave corner) when each normal points along the
-            # other segment, away from the shared vertex
-            v = shared[0]
-            other_b = b.p1 if abs(b.p0[0] - v[0]) < tol and abs(b.p0[1] - v[1]) < tol else b.p0
-            if (other_b[0] - v[0]) * a.normal[0] + (other_b[1] - v[1]) * a.normal[1] > 0:
+            c = np.array(a.p0) + s_ * ta
+
+            def reaches(seg, normal):
+                return max(np.dot(np.array(seg.p0) - c, normal),
+                           np.dot(np.array(seg.p1) - c, normal)) > tol
+
+            if reaches(a, np.array(b.normal)) and reaches(b, np.array(a.normal)):
                 pairs.append((i, j))
     return np.array(pairs, dtype=np.int64).reshape(-1, 2)

@@ -80,6 +80,8 @@ class Simulation:
         self.aux = np.zeros((pipeline.n_aux, state.n))
         self.on_removal = None
         self._fld = None
+        #: fluid particles put back across a mirror wall they had crossed (see ghosts.push_back)
+        self.pushed_back = 0
         #: prescribed motions by wall-entry index (sphfoam.models.motion)
         self.motions = dict(motions or {})
         self.segments = list(segments)
@@ -147,8 +149,11 @@ class Simulation:
         sort by cell."""
         st = self.state
         self._fld = None
-        if self.mirror and (st.kind == GHOST).any():
-            st.keep(st.kind != GHOST)
+        if self.mirror:
+            if (st.kind == GHOST).any():
+                st.keep(st.kind != GHOST)
+            self.pushed_back += gh.push_back(st.x, st.y, st.u, st.v, st.kind, self.seg,
+                                             self.reach)
         cell, outside = self.cells.bin(st.x, st.y)
         if outside:
             gone = cell < 0

@@ -2,6 +2,7 @@
 
 import sphfoam.sampling.damBreak  # noqa: F401  (function objects)
 import sphfoam.sampling.profiles  # noqa: F401
+import sphfoam.sampling.waves  # noqa: F401
 
 from sphfoam.models import (  # noqa: F401
     boundaries,
@@ -9,6 +10,7 @@ from sphfoam.models import (  # noqa: F401
     eos,
     equations,
     filters,
+    goring,
     integrators,
     kernels,
     motion,
@@ -16,4 +18,5 @@ from sphfoam.models import (  # noqa: F401
     turbulence,
     viscosity,
     wavemakers,
+    wavetheory,
 )

@@ -16,6 +16,9 @@ from scipy.spatial import cKDTree
 
 from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.setup.waves import fields as wave_fields
+from sphfoam.setup.waves import surface as wave_surface
+from sphfoam.setup.waves import wave_columns
 from sphfoam.setup.geometry import (distance_to_walls, fluid_side, lattice_offsets,
                                     polylines_of, segments_of, wall_metadata)
 
@@ -92,7 +95,7 @@ def local_surface(xf, yf, dx):
 
 
 def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | None = None,
-             moving: bool = False) -> ParticleState:
+             moving: bool = False, waves=()) -> ParticleState:
     """Particles of a case at rest in hydrostatic equilibrium.
 
     ``boundary`` (the selected boundary model) decides where wall particles go
@@ -100,13 +103,26 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     particle fields are stored (``wall_fields``: normal, distance behind the wall, corner
     flag, fully-wet pair count ``nFull`` for a support of ``support_radius``). ``moving``
     adds the wall entry index ``patch`` and the initial positions ``x0, y0`` that prescribed
-    motions displace.
+    motions displace. ``waves`` (pairs of InitialWave and theory model, from
+    ``constant/waveProperties``) put solitary waves on every box of still water, with their
+    velocity and pressure (sphfoam.setup.waves).
     """
     dx = pd.dx
     placement = getattr(boundary, "wall_placement", "rows")
     segs = segments_of(pd)
-    fx, fy = zip(*(fluid_points(r, dx) for r in pd.fluid.values()))
-    xf, yf = np.concatenate(fx), np.concatenate(fy)
+    gmag = float(np.hypot(*ctx.g))
+    pieces = []
+    for r in pd.fluid.values():
+        if waves and isinstance(r, BoxRegion):
+            x_, y_, dy_ = wave_columns(r, dx, waves, gmag)
+            pieces.append((x_, y_, dy_, r))
+        else:
+            x_, y_ = fluid_points(r, dx)
+            pieces.append((x_, y_, np.full(x_.size, dx), None))
+    xf = np.concatenate([q[0] for q in pieces])
+    yf = np.concatenate([q[1] for q in pieces])
+    dyf = np.concatenate([q[2] for q in pieces])
+    regf = np.concatenate([np.full(q[0].size, i) for i, q in enumerate(pieces)])
     walls = list(pd.walls.values())
     if walls and placement != "none":
         layers = getattr(boundary, "wall_layers", None)
@@ -125,15 +141,29 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     if xw.size and xf.size:
         # fluid never overlaps walls: drop fluid particles closer than dx/2 to a wall particle
         d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]))
-        xf, yf = xf[d >= 0.5 * dx], yf[d >= 0.5 * dx]
+        ok = d >= 0.5 * dx
+        xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     if segs and xf.size:
         # ... or to a wall line (walls without particles, e.g. mirrored ghosts)
-        d = distance_to_walls(segs, xf, yf)
-        xf, yf = xf[d >= 0.5 * dx * (1 - 1e-6)], yf[d >= 0.5 * dx * (1 - 1e-6)]
+        ok = distance_to_walls(segs, xf, yf) >= 0.5 * dx * (1 - 1e-6)
+        xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     if xf.size == 0:
         raise ValueError("system/particleDict: fluid regions produce no particles at this dx")
     gdown = max(-float(ctx.g[1]), 0.0)   # hydrostatic along -y only (a body force along x,
     eta_f = local_surface(xf, yf, dx)     # e.g. a channel's driving force, adds no pressure)
+    uf = np.zeros(xf.size)
+    vf = np.zeros(xf.size)
+    pf = None
+    if waves:
+        pf = ctx.rho0 * gdown * np.maximum(eta_f - yf, 0.0)
+        for i, (_, _, _, r) in enumerate(pieces):
+            if r is None:
+                continue
+            sel = regf == i
+            (x0, bed), (_, top) = r.min, r.max
+            uf[sel], vf[sel], pf[sel] = wave_fields(xf[sel], yf[sel], bed, top - bed, waves,
+                                                    gmag, ctx.rho0)
+            eta_f[sel] = top + wave_surface(xf[sel], top - bed, waves, gmag)
     if xw.size:
         _, nearest = cKDTree(np.column_stack([xf, yf])).query(np.column_stack([xw, yw]))
         eta_w = eta_f[nearest]
@@ -143,10 +173,13 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     y = np.concatenate([yf, yw])
     eta = np.concatenate([eta_f, eta_w])
     p = ctx.rho0 * gdown * np.maximum(eta - y, 0.0)
+    if pf is not None:
+        p[:xf.size] = pf
     rho = eos.density(p, ctx)
     kind = np.concatenate([np.full(xf.size, FLUID), np.full(xw.size, WALL)])
-    u = np.concatenate([np.zeros(xf.size), uw])
-    v = np.concatenate([np.zeros(xf.size), vw])
+    u = np.concatenate([uf, uw])
+    v = np.concatenate([vf, vw])
+    dy = np.concatenate([dyf, np.full(xw.size, dx)])
     extra = {}
     # the distance behind the wall is always written: it records how the walls were set up
     wanted = set(getattr(boundary, "wall_fields", ())) | {"wallDist"}
@@ -161,7 +194,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         extra["patch"] = np.concatenate([np.full(xf.size, -1.0), pw.astype(float)])
         extra["x0"] = x.copy()
         extra["y0"] = y.copy()
-    return ParticleState(x, y, u, v, rho, rho * dx * dx, kind, extra=extra)
+    return ParticleState(x, y, u, v, rho, rho * dx * dy, kind, extra=extra)
 
 
 def _first_of_duplicates(x, y, r):

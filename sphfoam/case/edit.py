@@ -1,0 +1,41 @@
+"""Cloning a case and editing its dictionaries (tutorial variants, studies, tests)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from sphfoam.case import foamdict
+
+#: what a clone leaves behind: results of the source case
+RESULTS = ("[1-9]*", "0.*", "postProcessing", "VTK", "log.*", "lagrangian", "uniform",
+           "compare")
+
+
+def set_entry(case: Path, rel: str, key: str, value) -> None:
+    """Set ``a.b.c`` in ``case/rel`` (written back in OpenFOAM syntax); None removes it."""
+    path = Path(case) / rel
+    d = foamdict.read(path)
+    header = d.pop("FoamFile", None)
+    node = d
+    *parents, last = key.split(".")
+    for k in parents:
+        node = node.setdefault(k, {})
+    if value is None:
+        node.pop(last, None)
+    else:
+        node[last] = value
+    foamdict.write(path, d, header=header)
+
+
+def clone_case(src: Path, dst: Path, edits: dict | None = None) -> Path:
+    """Copy the dictionaries of ``src`` (no results) to ``dst`` and apply
+    ``{"file:key.path": value}`` edits."""
+    dst = Path(dst)
+    if dst.exists():
+        shutil.rmtree(dst)
+    shutil.copytree(src, dst, ignore=shutil.ignore_patterns(*RESULTS))
+    for where, value in (edits or {}).items():
+        rel, key = where.split(":")
+        set_entry(dst, rel, key, value)
+    return dst

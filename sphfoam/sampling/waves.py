@@ -1,0 +1,573 @@
+"""Free-surface wave sampling: gauges, probes, u(z) lines, run-up and crest tracking (T ch. 4).
+
+Every object reads the fluid particles only (``kind == FLUID``: wall particles and the
+ghosts mirrored across walls are ignored) and writes, as every function object does,
+``postProcessing/<name>/<startTime>/<name>.dat`` with a ``#`` header whose last line names
+the columns.
+
+Surface convention (shared with ``damBreakFront``): a particle stands for a dx x dx cell, so
+the free surface is the top of the highest particle's cell, its y **plus dx/2**. Water at rest
+on a lattice whose particles sit at cell centres (as the set-up places them) then reads its
+true level, e.g. 0 above a still level ``still`` equal to the depth.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+from numba import njit
+from pydantic import Field, field_validator, model_validator
+
+from sphfoam.case.schemas import Vector2
+from sphfoam.engine.state import FLUID
+from sphfoam.registry import register
+from sphfoam.sampling.base import FunctionObject, FunctionObjectCoeffs
+
+#: half-width of a wave gauge's search windows in units of dx, delta x = 2.5 dx (T §4.3.2)
+GAUGE_WINDOW = 2.5
+
+
+def _as_list(v):
+    return [v] if isinstance(v, (int, float)) else v
+
+
+def _label(v: float) -> str:
+    return f"{v:g}"
+
+
+def _fluid(sim):
+    st = sim.state
+    f = st.kind == FLUID
+    return st, f
+
+
+# --- free-surface gauge, T §4.3.2 --------------------------------------------------------------
+@njit(cache=True)
+def _gauge_tops(xs, ys, gx, lo, mid, hi):
+    """Highest particle in [lo, mid) and in [mid, hi) of x-sorted particles for each gauge
+    (ties: the one nearest the gauge); linear interpolation between them to the gauge."""
+    n = gx.size
+    out = np.empty(n)
+    for g in range(n):
+        xg = gx[g]
+        yl, xl, il = -np.inf, 0.0, -1
+        for i in range(lo[g], mid[g]):
+            if ys[i] > yl or (ys[i] == yl and xs[i] > xl):
+                yl, xl, il = ys[i], xs[i], i
+        yr, xr, ir = -np.inf, 0.0, -1
+        for i in range(mid[g], hi[g]):
+            if ys[i] > yr or (ys[i] == yr and xs[i] < xr):
+                yr, xr, ir = ys[i], xs[i], i
+        if il >= 0 and ir >= 0:
+            out[g] = yl + (yr - yl) * (xg - xl) / (xr - xl) if xr > xl else max(yl, yr)
+        elif il >= 0:
+            out[g] = yl
+        elif ir >= 0:
+            out[g] = yr
+        else:
+            out[g] = np.nan
+    return out
+
+
+def surface_elevation(x_particles, y_particles, gauges_x, dx, *, still: float = 0.0,
+                      window: float = GAUGE_WINDOW, presorted: bool = False) -> np.ndarray:
+    """Free-surface elevation at ``gauges_x`` by the SPH wave gauge of T §4.3.2 (Fig 4.1).
+
+    For each gauge x_g: the highest particle with x_g - delta x <= x < x_g and the highest with
+    x_g <= x <= x_g + delta x (delta x = ``window`` dx, 2.5 dx in the thesis; ties go to the
+    particle nearest the gauge), joined by a straight line evaluated at x_g; plus dx/2 (the top
+    of that particle's cell, so a lattice at rest reads its true surface), minus ``still``.
+    With particles on one side only, that particle's height is used; with none, NaN.
+    Pass the fluid particles only; ``presorted`` says x is already ascending.
+    """
+    x = np.asarray(x_particles, dtype=float)
+    y = np.asarray(y_particles, dtype=float)
+    g = np.atleast_1d(np.asarray(gauges_x, dtype=float))
+    if not presorted:
+        order = np.argsort(x, kind="stable")
+        x, y = x[order], y[order]
+    half = window * dx
+    lo = np.searchsorted(x, g - half, side="left")
+    mid = np.searchsorted(x, g, side="left")
+    hi = np.searchsorted(x, g + half, side="right")
+    top = _gauge_tops(np.ascontiguousarray(x), np.ascontiguousarray(y), np.ascontiguousarray(g),
+                      lo, mid, hi)
+    return top + 0.5 * dx - still
+
+
+# --- SPH interpolation with Shepard normalisation ----------------------------------------------
+@njit(cache=True)
+def _shepard(xs, ys, vol, vals, lo, hi, xq, yq, inv_h, support, kernel_f):
+    nf, nq = vals.shape[0], xq.size
+    out = np.empty((nf, nq))
+    acc = np.empty(nf)
+    for k in range(nq):
+        wsum = 0.0
+        for j in range(nf):
+            acc[j] = 0.0
+        for i in range(lo[k], hi[k]):
+            dxq = xq[k] - xs[i]
+            dyq = yq[k] - ys[i]
+            q = math.sqrt(dxq * dxq + dyq * dyq) * inv_h
+            if q >= support:
+                continue
+            w = kernel_f(q) * vol[i]
+            if w == 0.0:
+                continue
+            wsum += w
+            for j in range(nf):
+                acc[j] += w * vals[j, i]
+        for j in range(nf):
+            out[j, k] = acc[j] / wsum if wsum > 0.0 else np.nan
+    return out
+
+
+def sph_interpolate(x, y, vol, fields, xq, yq, kernel, h) -> np.ndarray:
+    """Shepard-normalised SPH interpolation A(r) = sum_b A_b V_b W_b / sum_b V_b W_b (T(3.8)
+    divided by the kernel sum, as the Shepard filter T(3.69)) of each row of ``fields``
+    (shape (nFields, nParticles)) at the points (xq, yq); V_b = m/rho.
+
+    ``kernel`` is the case's kernel model (``sphfoam.models.kernels``): its jitted f(q) and
+    support are used (the normalisation alpha_d / h^2 cancels). Points with no particle
+    within the kernel support give NaN.
+    """
+    from sphfoam.models import kernels as kernel_module
+
+    f = getattr(kernel_module, kernel.f_name)
+    x = np.asarray(x, dtype=float)
+    order = np.argsort(x, kind="stable")
+    xs = np.ascontiguousarray(x[order])
+    ys = np.ascontiguousarray(np.asarray(y, dtype=float)[order])
+    vs = np.ascontiguousarray(np.asarray(vol, dtype=float)[order])
+    vals = np.ascontiguousarray(np.atleast_2d(np.asarray(fields, dtype=float))[:, order])
+    xq = np.ascontiguousarray(np.atleast_1d(np.asarray(xq, dtype=float)))
+    yq = np.ascontiguousarray(np.atleast_1d(np.asarray(yq, dtype=float)))
+    reach = kernel.support * h
+    lo = np.searchsorted(xs, xq - reach, side="left")
+    hi = np.searchsorted(xs, xq + reach, side="right")
+    return _shepard(xs, ys, vs, vals, lo, hi, xq, yq, 1.0 / h, float(kernel.support), f)
+
+
+def _current_pressure(sim) -> None:
+    eos = getattr(sim, "eos", None)
+    if callable(eos):
+        eos()
+
+
+def _sample_fluid(sim, case, ctx, xq, yq) -> np.ndarray:
+    """(p, Ux, Uy) rows interpolated at the points from the fluid particles of ``sim``."""
+    st, f = _fluid(sim)
+    vol = st.m[f] / st.rho[f]
+    fields = np.stack([st.p[f], st.u[f], st.v[f]])
+    return sph_interpolate(st.x[f], st.y[f], vol, fields, xq, yq, case.models.sph["kernel"],
+                           ctx.h)
+
+
+# --- waveGauges --------------------------------------------------------------------------------
+@register
+class WaveGauges(FunctionObject):
+    """Free-surface elevation eta(t) at a set of wave gauges, the SPH wave gauge of T §4.3.2.
+
+    At each gauge the highest fluid particle within delta x = 2.5 dx on either side
+    ([x_g - delta x, x_g) and [x_g, x_g + delta x]) is found and the two are joined by a
+    straight line evaluated at x_g (T Fig 4.1); dx/2 is added (the top of the particle's cell,
+    as in ``damBreakFront``) so that water at rest reads its true level, and ``still`` is
+    subtracted. A gauge with fluid on one side only reads that particle; with none, NaN.
+    """
+
+    name = "waveGauges"
+    doc = "free-surface elevation eta(t) at wave gauges: highest particle within 2.5 dx either " \
+          "side, interpolated linearly, T §4.3.2"
+
+    class Coeffs(FunctionObjectCoeffs):
+        x: list[float] = Field(min_length=1, description=(
+            "gauge positions (m), e.g. `(1 2 4 6 8)` (T §4.3.2 used x = 1, 2 m and then every "
+            "2 m up to 20 m from the paddle)"))
+        still: float = Field(0.0, description=(
+            "still-water level (m): eta = surface y - still (0: eta is the surface y itself)"))
+        window: float = Field(GAUGE_WINDOW, gt=0, description=(
+            "half-width delta x of the search windows either side of a gauge, in dx "
+            "(2.5 in T §4.3.2)"))
+
+        @field_validator("x", mode="before")
+        @classmethod
+        def _one(cls, v):
+            return _as_list(v)
+
+    def start(self, case, ctx, start_time_name):
+        self.columns = ("time",) + tuple(f"eta({_label(x)})" for x in self.coeffs.x)
+        super().start(case, ctx, start_time_name)
+
+    def execute(self, sim):
+        c = self.coeffs
+        st, f = _fluid(sim)
+        eta = surface_elevation(st.x[f], st.y[f], c.x, self.ctx.dx, still=c.still,
+                                window=c.window)
+        self.write_row((sim.time, *eta))
+
+
+# --- probes ------------------------------------------------------------------------------------
+@register
+class Probes(FunctionObject):
+    """Pressure and velocity at fixed points, SPH-interpolated from the fluid particles.
+
+    A(r) = sum_b A_b (m_b/rho_b) W(r - r_b) / sum_b (m_b/rho_b) W(r - r_b) over the fluid
+    particles with the case's kernel and h (the SPH interpolant T(3.8) normalised as the
+    Shepard filter T(3.69): constant fields stay exact near the free surface and walls, where
+    the kernel support is truncated). The pressure is brought up to date with the equation of
+    state first. A point with no fluid particle within the kernel support gives NaN.
+    """
+
+    name = "probes"
+    doc = "SPH-interpolated (Shepard-normalised) pressure and velocity at fixed points, " \
+          "T(3.8), T(3.69)"
+
+    class Coeffs(FunctionObjectCoeffs):
+        points: list[Vector2] = Field(min_length=1, description=(
+            "probe locations `((x1 y1) (x2 y2) ...)` (m)"))
+
+    def start(self, case, ctx, start_time_name):
+        cols = ["time"]
+        for px, py in self.coeffs.points:
+            loc = f"({_label(px)},{_label(py)})"
+            cols += [f"p{loc}", f"Ux{loc}", f"Uy{loc}"]
+        self.columns = tuple(cols)
+        super().start(case, ctx, start_time_name)
+
+    def execute(self, sim):
+        _current_pressure(sim)
+        pts = np.asarray(self.coeffs.points, dtype=float)
+        vals = _sample_fluid(sim, self.case, self.ctx, pts[:, 0], pts[:, 1])
+        self.write_row((sim.time, *vals.T.ravel()))
+
+
+# --- lines -------------------------------------------------------------------------------------
+@register
+class Lines(FunctionObject):
+    """Velocity and pressure profiles u(z) along vertical lines from the bed to the surface.
+
+    Lines stand at fixed ``x`` or, with ``follow crest``, under the wave crest, the x of the
+    highest fluid particle at that instant (T Figs 4.17, 4.21). Each line has ``nPoints``
+    points evenly spaced from ``y0`` (the bed) up to the local surface given by the wave gauge
+    (T §4.3.2, dx/2 convention); p, Ux, Uy are SPH-interpolated there as in ``probes``. Each
+    sample writes ``<time>/line.dat`` (columns y, Ux, Uy, p; with several lines these four
+    repeat per line, the header naming each line's x); ``<name>.dat`` holds time and, per
+    line, its x and surface y.
+    """
+
+    name = "lines"
+    doc = "u(z) profiles (Ux, Uy, p) from bed to surface at fixed x or under the moving crest, " \
+          "T Figs 4.17, 4.21"
+
+    class Coeffs(FunctionObjectCoeffs):
+        x: list[float] = Field(default_factory=list, description=(
+            "x of the vertical lines (m), e.g. `(5 10)`; leave out with `follow crest`"))
+        follow: Literal["none", "crest"] = Field("none", description=(
+            "`crest`: one line under the highest fluid particle, moving with the wave "
+            "(T Figs 4.17, 4.21); `none`: the fixed lines of `x`"))
+        xMin: float = Field(-math.inf, description=(
+            "with `follow crest`, only look for the crest at x >= xMin (e.g. beyond the "
+            "paddle)"))
+        xMax: float = Field(math.inf, description=(
+            "with `follow crest`, only look for the crest at x <= xMax"))
+        y0: float = Field(0.0, description="y of the bed (m), the lowest point of each line")
+        nPoints: int = Field(20, ge=2, description=(
+            "points per line, evenly spaced from y0 to the local surface"))
+        still: float = Field(0.0, description=(
+            "still-water level (m), for the surface elevation in the header of line.dat"))
+
+        @field_validator("x", mode="before")
+        @classmethod
+        def _one(cls, v):
+            return _as_list(v)
+
+        @model_validator(mode="after")
+        def _check(self):
+            if self.follow == "crest" and self.x:
+                raise ValueError("give either x (fixed lines) or follow crest, not both")
+            if self.follow == "none" and not self.x:
+                raise ValueError("give the line positions x, or follow crest")
+            return self
+
+    def start(self, case, ctx, start_time_name):
+        n = 1 if self.coeffs.follow == "crest" else len(self.coeffs.x)
+        cols = ["time"]
+        for k in range(n):
+            tag = "" if n == 1 else f"_{k}"
+            cols += [f"x{tag}", f"surface{tag}"]
+        self.columns = tuple(cols)
+        super().start(case, ctx, start_time_name)
+        self.precision = int(getattr(getattr(case, "control", None), "timePrecision", 6) or 6)
+
+    def line_positions(self, xf, yf) -> np.ndarray:
+        c = self.coeffs
+        if c.follow == "crest":
+            sel = (xf >= c.xMin) & (xf <= c.xMax)
+            if not sel.any():
+                return np.array([np.nan])
+            i = int(np.argmax(np.where(sel, yf, -np.inf)))
+            return np.array([xf[i]])
+        return np.asarray(c.x, dtype=float)
+
+    def execute(self, sim):
+        from sphfoam.case.times import time_name
+
+        c, dx = self.coeffs, self.ctx.dx
+        _current_pressure(sim)
+        st, f = _fluid(sim)
+        xf, yf = st.x[f], st.y[f]
+        xl = self.line_positions(xf, yf)
+        surf = np.full(xl.size, np.nan)
+        ok = np.isfinite(xl)
+        if ok.any() and xf.size:
+            surf[ok] = surface_elevation(xf, yf, xl[ok], dx)
+        frac = np.linspace(0.0, 1.0, c.nPoints)
+        ys = c.y0 + (surf[:, None] - c.y0) * frac[None, :]          # (nLines, nPoints)
+        xs = np.repeat(xl, c.nPoints)
+        vals = np.full((3, xs.size), np.nan)
+        good = np.isfinite(ys.ravel()) & np.isfinite(xs)
+        if good.any():
+            vals[:, good] = _sample_fluid(sim, self.case, self.ctx, xs[good], ys.ravel()[good])
+        p, ux, uy = (v.reshape(xl.size, c.nPoints) for v in vals)
+        row = [sim.time]
+        for k in range(xl.size):
+            row += [xl[k], surf[k]]
+        self.write_row(row)
+
+        folder = self.folder / time_name(float(sim.time), self.precision)
+        folder.mkdir(parents=True, exist_ok=True)
+        table = np.column_stack([a for k in range(xl.size)
+                                 for a in (ys[k], ux[k], uy[k], p[k])])
+        one = xl.size == 1
+        cols = [f"{q}{'' if one else f'({_label(xl[k])})'}"
+                for k in range(xl.size) for q in ("y", "Ux", "Uy", "p")]
+        where = "; ".join(f"x = {xl[k]:.9g}, surface y = {surf[k]:.9g}, eta = "
+                          f"{surf[k] - c.still:.9g}" for k in range(xl.size))
+        with (folder / "line.dat").open("w") as fh:
+            fh.write(f"# {self.object_name} ({self.name}) at time {sim.time:.9g}"
+                     f"{' under the crest' if c.follow == 'crest' else ''}: {where}\n")
+            fh.write("# " + "\t".join(cols) + "\n")
+            for r in table:
+                fh.write("\t".join(f"{v:.9g}" for v in r) + "\n")
+
+
+# --- runUp -------------------------------------------------------------------------------------
+def wall_run_up(xf, yf, wall_x, dx, *, still=0.0, band=1.5) -> float:
+    """Highest fluid particle within ``band`` dx of the vertical wall x = ``wall_x``, + dx/2,
+    above ``still`` (NaN with no fluid there)."""
+    near = np.abs(np.asarray(xf) - wall_x) <= band * dx
+    if not near.any():
+        return float("nan")
+    return float(np.asarray(yf)[near].max()) + 0.5 * dx - still
+
+
+def beach_run_up(xf, yf, start, angle, dx, *, length=math.inf, still=0.0, band=1.5) -> float:
+    """Shoreline elevation on a plane beach rising from ``start`` at ``angle`` degrees: the
+    highest fluid particle within ``band`` dx of the slope line (along it, 0 <= s <= length),
+    + dx/2, above ``still`` (NaN with no fluid in contact)."""
+    a = math.radians(angle)
+    rx, ry = np.asarray(xf) - start[0], np.asarray(yf) - start[1]
+    s = rx * math.cos(a) + ry * math.sin(a)
+    n = -rx * math.sin(a) + ry * math.cos(a)
+    near = (np.abs(n) <= band * dx) & (s >= 0.0) & (s <= length)
+    if not near.any():
+        return float("nan")
+    return float(np.asarray(yf)[near].max()) + 0.5 * dx - still
+
+
+@register
+class RunUp(FunctionObject):
+    """Run-up R(t) on a vertical wall or a plane beach, and its running maximum (T §5.2.1).
+
+    ``mode wall``: the highest fluid particle within ``band`` dx (1.5) of the wall x = ``x``.
+    ``mode beach``: the shoreline, the highest fluid particle within ``band`` dx of the beach
+    line rising from ``start`` at ``angle`` degrees (as a slope wall of particleDict) over
+    ``length``. Both add dx/2 (the dx/2 surface convention: still water reads R = 0 when
+    ``still`` is its level) and subtract ``still``. NaN while no fluid touches the wall/beach.
+    """
+
+    name = "runUp"
+    doc = "run-up on a vertical wall or a plane beach (highest fluid particle in contact + " \
+          "dx/2) and its running maximum"
+    columns = ("time", "runUp", "maxRunUp")
+
+    class Coeffs(FunctionObjectCoeffs):
+        mode: Literal["wall", "beach"] = Field(description=(
+            "`wall`: a vertical wall at `x`; `beach`: a plane slope given by `start` and "
+            "`angle`"))
+        x: float | None = Field(None, description="x of the wall (m), mode wall")
+        start: Vector2 | None = Field(None, description=(
+            "foot of the beach line `(x y)` (m), mode beach"))
+        angle: float | None = Field(None, gt=-90.0, lt=90.0, description=(
+            "slope of the beach in degrees above the +x axis, mode beach"))
+        length: float = Field(math.inf, gt=0, description=(
+            "length of the beach along the slope from `start` (m), mode beach"))
+        still: float = Field(0.0, description="still-water level (m) run-up is measured from")
+        band: float = Field(1.5, gt=0, description=(
+            "contact distance from the wall or beach line, in dx"))
+
+        @model_validator(mode="after")
+        def _check(self):
+            if self.mode == "wall" and self.x is None:
+                raise ValueError("mode wall needs the wall position x")
+            if self.mode == "beach" and (self.start is None or self.angle is None):
+                raise ValueError("mode beach needs start (x y) and angle")
+            return self
+
+    def start(self, case, ctx, start_time_name):
+        super().start(case, ctx, start_time_name)
+        self.max = float("nan")
+
+    def measure(self, xf, yf) -> float:
+        c, dx = self.coeffs, self.ctx.dx
+        if c.mode == "wall":
+            return wall_run_up(xf, yf, c.x, dx, still=c.still, band=c.band)
+        return beach_run_up(xf, yf, c.start, c.angle, dx, length=c.length, still=c.still,
+                            band=c.band)
+
+    def execute(self, sim):
+        st, f = _fluid(sim)
+        r = self.measure(st.x[f], st.y[f])
+        self.max = float(np.fmax(self.max, r))
+        self.write_row((sim.time, r, self.max))
+
+
+# --- crestTracker ------------------------------------------------------------------------------
+def crest(gx, eta, fit_above: float = 0.5) -> tuple[float, float]:
+    """(x_c, eta_c) of a surface sampled at gauges ``gx`` (ascending): eta_c is the highest
+    reading; x_c is the vertex of the least-squares parabola through the contiguous readings
+    around it that are at least ``fit_above`` eta_c (the highest gauge's x when fewer than 3
+    or the fit is not concave). NaN readings are ignored."""
+    gx = np.asarray(gx, dtype=float)
+    e = np.where(np.isfinite(eta), eta, -np.inf)
+    if not np.isfinite(e).any():
+        return float("nan"), float("nan")
+    j = int(np.argmax(e))
+    top = float(e[j])
+    if top <= 0.0:
+        return float(gx[j]), top
+    below = np.flatnonzero(e < fit_above * top)
+    a = below[below < j]
+    b = below[below > j]
+    i0 = a[-1] + 1 if a.size else 0
+    i1 = b[0] if b.size else e.size
+    if i1 - i0 < 3:
+        return float(gx[j]), top
+    xs = gx[i0:i1] - gx[j]
+    c2, c1, _ = np.polyfit(xs, e[i0:i1], 2)
+    if c2 >= 0.0:
+        return float(gx[j]), top
+    xc = float(np.clip(-c1 / (2.0 * c2), xs[0], xs[-1]))
+    return float(gx[j] + xc), top
+
+
+def fit_celerity(t, xc) -> tuple[float, float, float]:
+    """(c, x0, rms) of the least-squares line x_c = x0 + c t (NaN with fewer than 2 points)."""
+    t, xc = np.asarray(t, dtype=float), np.asarray(xc, dtype=float)
+    if t.size < 2 or np.ptp(t) == 0:
+        return float("nan"), float("nan"), float("nan")
+    c, x0 = np.polyfit(t, xc, 1)
+    rms = float(np.sqrt(np.mean((xc - (x0 + c * t)) ** 2)))
+    return float(c), float(x0), rms
+
+
+@register
+class CrestTracker(FunctionObject):
+    """Crest position x_c(t), crest height eta_c(t) and celerity of a travelling wave (T §4.4.2).
+
+    The surface is read by wave gauges (T §4.3.2, dx/2 convention) every ``spacing`` (default
+    dx) from ``xMin`` to ``xMax`` (default: the extent of the fluid). eta_c is the highest
+    reading; x_c the vertex of the least-squares parabola through the contiguous readings
+    around it above ``fitAbove`` eta_c (many gauges, so it is not tied to the gauge grid
+    or the particle noise; exact for a symmetric crest). Each row's celerity c is the central
+    difference of x_c between the neighbouring samples (one-sided at the first and last), so
+    rows are written one sample late. At the end c is fitted by least squares to x_c(t) over
+    the samples with ``fitFrom`` <= x_c <= ``fitTo`` and eta_c >= ``minHeight`` and written
+    to ``celerity.dat`` (the thesis's average wave speed between two gauges, T Table 4.3,
+    with every sample in between).
+    """
+
+    name = "crestTracker"
+    doc = "crest position, height and celerity of a travelling wave (gauges every dx, " \
+          "least-squares fits), T §4.3.2"
+    columns = ("time", "xCrest", "etaCrest", "c")
+
+    class Coeffs(FunctionObjectCoeffs):
+        xMin: float | None = Field(None, description=(
+            "first gauge (m); default the leftmost fluid particle"))
+        xMax: float | None = Field(None, description=(
+            "last gauge (m); default the rightmost fluid particle"))
+        spacing: float | None = Field(None, gt=0, description="gauge spacing (m); default dx")
+        still: float = Field(0.0, description="still-water level (m): eta = surface y - still")
+        window: float = Field(GAUGE_WINDOW, gt=0, description=(
+            "half-width of each gauge's search windows, in dx (2.5 in T §4.3.2)"))
+        fitAbove: float = Field(0.5, gt=0, lt=1, description=(
+            "x_c is the vertex of the parabola fitted to the readings above this fraction "
+            "of the crest height"))
+        fitFrom: float = Field(-math.inf, description=(
+            "celerity fit: only samples with the crest at x_c >= fitFrom (m)"))
+        fitTo: float = Field(math.inf, description=(
+            "celerity fit: only samples with the crest at x_c <= fitTo (m)"))
+        minHeight: float = Field(0.0, description=(
+            "celerity fit: only samples with eta_c >= minHeight (m), e.g. once the wave has "
+            "formed"))
+
+    def start(self, case, ctx, start_time_name):
+        super().start(case, ctx, start_time_name)
+        self.samples: list[tuple[float, float, float]] = []
+        self._written = 0
+        self.summary_file = self.folder / "celerity.dat"
+
+    def measure(self, xf, yf) -> tuple[float, float]:
+        c, dx = self.coeffs, self.ctx.dx
+        if xf.size == 0:
+            return float("nan"), float("nan")
+        lo = c.xMin if c.xMin is not None else float(xf.min())
+        hi = c.xMax if c.xMax is not None else float(xf.max())
+        step = c.spacing or dx
+        gx = lo + step * np.arange(int(math.floor((hi - lo) / step + 1e-9)) + 1)
+        eta = surface_elevation(xf, yf, gx, dx, still=c.still, window=c.window)
+        return crest(gx, eta, c.fitAbove)
+
+    def execute(self, sim):
+        st, f = _fluid(sim)
+        xc, ec = self.measure(st.x[f], st.y[f])
+        self.samples.append((float(sim.time), xc, ec))
+        if len(self.samples) >= 2:
+            self._flush(len(self.samples) - 1)
+
+    def _celerity(self, i: int) -> float:
+        s = self.samples
+        a, b = max(i - 1, 0), min(i + 1, len(s) - 1)
+        if b == a or s[b][0] == s[a][0]:
+            return float("nan")
+        return (s[b][1] - s[a][1]) / (s[b][0] - s[a][0])
+
+    def _flush(self, upto: int) -> None:
+        while self._written < upto:
+            t, xc, ec = self.samples[self._written]
+            self.write_row((t, xc, ec, self._celerity(self._written)))
+            self._written += 1
+
+    def end(self):
+        self._flush(len(self.samples))
+        super().end()
+        c = self.coeffs
+        s = np.array(self.samples, dtype=float).reshape(-1, 3)
+        sel = np.isfinite(s[:, 1]) & (s[:, 1] >= c.fitFrom) & (s[:, 1] <= c.fitTo) & \
+            (s[:, 2] >= c.minHeight)
+        t, xc, ec = s[sel, 0], s[sel, 1], s[sel, 2]
+        cel, x0, rms = fit_celerity(t, xc)
+        cols = ("c", "x0", "etaMean", "tFrom", "tTo", "nSamples", "rms")
+        row = (cel, x0, float(ec.mean()) if ec.size else float("nan"),
+               float(t.min()) if t.size else float("nan"),
+               float(t.max()) if t.size else float("nan"), t.size, rms)
+        with self.summary_file.open("w") as fh:
+            fh.write(f"# {self.object_name} ({self.name}): celerity c from the least-squares "
+                     f"line x_c = x0 + c t over the samples with {c.fitFrom:g} <= x_c <= "
+                     f"{c.fitTo:g} and eta_c >= {c.minHeight:g}; etaMean: their mean crest "
+                     "height; rms: residual of x_c (m)\n")
+            fh.write("# " + "\t".join(cols) + "\n")
+            fh.write("\t".join(f"{v:.9g}" for v in row) + "\n")

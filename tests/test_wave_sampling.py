@@ -1,0 +1,360 @@
+"""Wave sampling function objects (sphfoam/sampling/waves.py) on synthetic particle sets.
+
+Gauge T §4.3.2 against an analytic solitary-wave surface, SPH probes against a linear field,
+run-up on a wall and a beach, crest celerity of a translated wave, and the start/execute/end
+cycle of every object against a fake simulation. No SPH run.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import sphfoam.sampling.waves as waves
+from sphfoam import registry
+from sphfoam.case.foamdict import parse
+from sphfoam.engine.state import FLUID, GHOST, WALL, ParticleState
+from sphfoam.models.base import CaseContext
+from sphfoam.models.kernels import CubicSpline, Gaussian, Quintic, WendlandC2
+from sphfoam.sampling.base import FunctionObjectCoeffs
+
+D, A, DX = 1.0, 0.3, 0.02                    # depth, wave height, particle spacing
+K = math.sqrt(3.0 * A / (4.0 * D**3))         # Boussinesq sech^2 wavenumber
+NAMES = ("waveGauges", "probes", "lines", "runUp", "crestTracker")
+
+
+def eta_sech2(x, x0):
+    return A / np.cosh(K * (np.asarray(x) - x0)) ** 2
+
+
+def lattice(surface, length=20.0, top=D + A, dx=DX):
+    """Particles at the cell centres of a dx lattice filling 0 <= y <= surface(x), as the
+    set-up places them."""
+    xc = (np.arange(int(round(length / dx))) + 0.5) * dx
+    yc = (np.arange(int(top / dx) + 2) + 0.5) * dx
+    X, Y = (a.ravel() for a in np.meshgrid(xc, yc))
+    keep = Y <= surface(X)
+    return X[keep], Y[keep]
+
+
+def stretched(surface, length=20.0, dx=DX):
+    """Columns of particles at x = (i + 1/2) dx with n = round(S/dx) rows evenly spaced by
+    S/n, so the top particle sits half a (local) spacing below the surface S(x)."""
+    xc = (np.arange(int(round(length / dx))) + 0.5) * dx
+    s = surface(xc)
+    n = np.rint(s / dx).astype(int)
+    j = np.concatenate([np.arange(m) for m in n])
+    return np.repeat(xc, n), (j + 0.5) * np.repeat(s / n, n)
+
+
+# --- fakes -------------------------------------------------------------------------------------
+class FakeSim:
+    """What a function object reads from a Simulation: state, time, eos()."""
+
+    def __init__(self, x, y, u=None, v=None, p=None, kind=None, time=0.0, rho0=1000.0):
+        n = len(x)
+        z = np.zeros(n)
+        self.state = ParticleState(x, y, z if u is None else u, z if v is None else v,
+                                   np.full(n, rho0), np.full(n, rho0 * DX * DX),
+                                   np.full(n, FLUID) if kind is None else kind)
+        if p is not None:
+            self.state.p[:] = p
+        self.time = time
+        self.eos_calls = 0
+
+    def eos(self):
+        self.eos_calls += 1
+
+
+def fake_case(tmp_path, kernel=None):
+    kernel = kernel or WendlandC2()
+    case = SimpleNamespace(path=tmp_path, models=SimpleNamespace(sph={"kernel": kernel}),
+                           control=SimpleNamespace(timePrecision=6))
+    ctx = CaseContext(dx=DX, h=kernel.coeffs.hdx * DX, rho0=1000.0, nu=1e-6, g=(0.0, -9.81),
+                      fluid_height=D)
+    return case, ctx
+
+
+def build(spec_text: str, name="fo"):
+    """A function object from its controlDict text, as the case layer builds it."""
+    fo = registry.build("functionObject", parse(spec_text))
+    fo.object_name = name
+    return fo
+
+
+def read_dat(path):
+    lines = path.read_text().splitlines()
+    header = [ln for ln in lines if ln.startswith("#")]
+    data = np.loadtxt(path, ndmin=2)
+    return header, header[-1][2:].split("\t"), data
+
+
+# --- registry ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", NAMES)
+def test_registered_with_doc_docstring_and_described_keys(name):
+    cls = registry.get("functionObject", name)
+    assert cls.__module__ == "sphfoam.sampling.waves"
+    assert cls.doc and "\n" not in cls.doc
+    assert cls.__dict__.get("__doc__", "").strip()
+    inherited = set(FunctionObjectCoeffs.model_fields)
+    for key, f in cls.Coeffs.model_fields.items():
+        assert key in inherited or f.description, f"{name}.{key} has no description"
+
+
+# --- wave gauge, T §4.3.2 ----------------------------------------------------------------------
+def test_gauge_reads_a_solitary_wave_surface():
+    """Columns whose top particle sits half a spacing below S = d + eta: the gauge reads eta
+    to 0.02 dx (the residual is the linear interpolation over <= 5 dx and the column spacing
+    S/n differing from dx by < dx/2n)."""
+    x0 = 10.0
+    x, y = stretched(lambda s: D + eta_sech2(s, x0))
+    g = np.linspace(2.0, 18.0, 401)
+    eta = waves.surface_elevation(x, y, g, DX, still=D)
+    assert np.max(np.abs(eta - eta_sech2(g, x0))) < 0.02 * DX
+
+
+def test_gauge_on_a_fixed_lattice_is_within_half_a_spacing():
+    """On the set-up's fixed lattice the top particle is 0..dx below the surface, so the reading
+    (top + dx/2) is within dx/2 of eta, unbiased on average."""
+    x0 = 9.97
+    x, y = lattice(lambda s: D + eta_sech2(s, x0))
+    g = np.linspace(2.0, 18.0, 801)
+    err = waves.surface_elevation(x, y, g, DX, still=D) - eta_sech2(g, x0)
+    assert np.max(np.abs(err)) <= 0.5 * DX + 1e-12
+    assert np.sqrt(np.mean(err**2)) < 0.3 * DX
+    assert abs(np.mean(err)) < 0.05 * DX
+
+
+def test_flat_water_reads_zero_exactly():
+    x, y = lattice(lambda s: np.full_like(s, D), length=4.0)
+    g = np.concatenate([np.linspace(0.0, 4.0, 97), (np.arange(200) + 0.5) * DX])  # ends too
+    eta = waves.surface_elevation(x, y, g, DX, still=D)
+    assert np.all(eta == 0.0)
+    np.testing.assert_array_equal(waves.surface_elevation(x, y, g, DX), D)   # still = 0: y
+
+
+def test_gauge_windows_and_interpolation():
+    """Highest particle in [x_g - 2.5 dx, x_g) and in [x_g, x_g + 2.5 dx], joined linearly."""
+    x = np.array([0.0, 0.5, 1.0, 3.0, 5.0]) * DX
+    y = np.array([0.9, 0.5, 0.2, 0.6, 0.4])
+    # gauge at 2 dx: left window [-0.5, 2) dx holds 0, 0.5, 1 -> highest (0, 0.9);
+    # right [2, 4.5] dx holds 3 -> (3, 0.6); line at 2 dx: 0.9 - 0.3 * 2/3 = 0.7
+    assert waves.surface_elevation(x, y, [2 * DX], DX)[0] == pytest.approx(0.7 + DX / 2)
+    # gauge on a particle: it is in the right window
+    assert waves.surface_elevation(x, y, [3 * DX], DX)[0] == pytest.approx(
+        0.2 + (0.6 - 0.2) * 2 / 2 + DX / 2)
+    # one side only reads that particle; no particle within 2.5 dx: NaN
+    assert waves.surface_elevation(x, y, [7.4 * DX], DX)[0] == pytest.approx(0.4 + DX / 2)
+    assert np.isnan(waves.surface_elevation(x, y, [9 * DX], DX)[0])
+
+
+def test_wave_gauges_object(tmp_path):
+    case, ctx = fake_case(tmp_path)
+    fo = build("type waveGauges; x (5 9.5 10 12.25); still 1;")
+    x0 = 10.0
+    x, y = stretched(lambda s: D + eta_sech2(s, x0))
+    # wall and ghost particles above the surface must not count
+    x = np.concatenate([x, [10.0, 5.0]])
+    y = np.concatenate([y, [3.0, 3.0]])
+    kind = np.concatenate([np.full(x.size - 2, FLUID), [WALL, GHOST]])
+    fo.start(case, ctx, "0")
+    for t in (0.0, 0.1):
+        fo.execute(FakeSim(x, y, kind=kind, time=t))
+    fo.end()
+    f = tmp_path / "postProcessing" / "fo" / "0" / "fo.dat"
+    header, cols, data = read_dat(f)
+    assert cols == ["time", "eta(5)", "eta(9.5)", "eta(10)", "eta(12.25)"]
+    assert data.shape == (2, 5)
+    np.testing.assert_allclose(data[:, 1:], np.tile(eta_sech2([5, 9.5, 10, 12.25], x0), (2, 1)),
+                               atol=0.02 * DX)
+
+
+# --- probes ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("kernel", [WendlandC2, CubicSpline, Quintic, Gaussian])
+def test_probes_interpolate_a_linear_field(kernel):
+    """Shepard-normalised SPH interpolation reproduces p = a + b y (and u, v) in the interior
+    of a lattice, away from the kernel support of the edges."""
+    kern = kernel()
+    h = kern.coeffs.hdx * DX
+    x, y = lattice(lambda s: np.full_like(s, D), length=2.0)
+    p = 1000.0 + 9810.0 * (D - y)
+    u, v = 0.3 + 0.5 * y, -0.1 * x
+    rng = np.random.default_rng(1)
+    xq = rng.uniform(0.5, 1.5, 50)
+    yq = rng.uniform(0.2, 0.8, 50)
+    out = waves.sph_interpolate(x, y, np.full(x.size, DX * DX), np.stack([p, u, v]), xq, yq,
+                                kern, h)
+    np.testing.assert_allclose(out[0], 1000.0 + 9810.0 * (D - yq), rtol=1e-3)
+    np.testing.assert_allclose(out[1], 0.3 + 0.5 * yq, rtol=1e-3)
+    np.testing.assert_allclose(out[2], -0.1 * xq, rtol=1e-3)
+    # above the water by more than the kernel support, or beyond its end: NaN
+    far = waves.sph_interpolate(x, y, np.full(x.size, DX * DX), np.stack([p]),
+                                [1.0, 3.0], [D + 1.01 * kern.support * h, 0.5], kern, h)
+    assert np.all(np.isnan(far))
+
+
+def test_probes_object(tmp_path):
+    case, ctx = fake_case(tmp_path)
+    fo = build("type probes; points ((1 0.5) (1.2 0.3 0) (1 5));")
+    x, y = lattice(lambda s: np.full_like(s, D), length=2.0)
+    sim = FakeSim(x, y, u=0.2 + 0 * x, v=0.1 * y, p=9810.0 * (D - y), time=0.5)
+    fo.start(case, ctx, "0")
+    fo.execute(sim)
+    fo.end()
+    assert sim.eos_calls == 1                   # pressure brought up to date first
+    header, cols, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    assert cols[:4] == ["time", "p(1,0.5)", "Ux(1,0.5)", "Uy(1,0.5)"]
+    assert len(cols) == 10 and data.shape == (1, 10)
+    np.testing.assert_allclose(data[0, 1:7], [4905.0, 0.2, 0.05, 9810 * 0.7, 0.2, 0.03],
+                               rtol=1e-3)
+    assert np.all(np.isnan(data[0, 7:]))        # (1 5) is far above the water
+
+
+# --- lines -------------------------------------------------------------------------------------
+def test_lines_follow_the_crest(tmp_path):
+    case, ctx = fake_case(tmp_path)
+    fo = build("type lines; follow crest; nPoints 11; y0 0; still 1; xMin 2;")
+    x0 = 10.01
+    x, y = stretched(lambda s: D + eta_sech2(s, x0))
+    u = 0.4 + 0.1 * y                          # a known linear profile
+    fo.start(case, ctx, "0")
+    for t in (0.0, 0.25):
+        fo.execute(FakeSim(x, y, u=u, p=9810.0 * (D + A - y), time=t))
+    fo.end()
+    header, cols, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    assert cols == ["time", "x", "surface"] and data.shape == (2, 3)
+    top = x[np.argmax(y)]
+    assert data[0, 1] == pytest.approx(top)
+    assert data[0, 2] == pytest.approx(D + eta_sech2(top, x0), abs=0.02 * DX)
+    for t in ("0", "0.25"):
+        _, lcols, line = read_dat(tmp_path / "postProcessing/fo/0" / t / "line.dat")
+        assert lcols == ["y", "Ux", "Uy", "p"] and line.shape == (11, 4)
+    np.testing.assert_allclose(line[:, 0], np.linspace(0.0, data[1, 2], 11))
+    inner = line[1:-2]                          # away from the bed and the surface
+    np.testing.assert_allclose(inner[:, 1], 0.4 + 0.1 * inner[:, 0], rtol=1e-3)
+
+
+def test_lines_at_fixed_x(tmp_path):
+    case, ctx = fake_case(tmp_path)
+    fo = build("type lines; x (0.5 1.5); nPoints 5;")
+    x, y = lattice(lambda s: np.full_like(s, D), length=2.0)
+    fo.start(case, ctx, "0")
+    fo.execute(FakeSim(x, y, u=0.1 + 0 * x, time=1.0))
+    fo.end()
+    _, cols, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    assert cols == ["time", "x_0", "surface_0", "x_1", "surface_1"]
+    np.testing.assert_allclose(data[0], [1.0, 0.5, D, 1.5, D])
+    _, lcols, line = read_dat(tmp_path / "postProcessing/fo/0/1/line.dat")
+    assert lcols[:4] == ["y(0.5)", "Ux(0.5)", "Uy(0.5)", "p(0.5)"] and line.shape == (5, 8)
+    np.testing.assert_allclose(line[:, 1], 0.1, rtol=1e-9)
+
+
+def test_lines_needs_x_or_crest():
+    with pytest.raises(Exception, match="x"):
+        build("type lines;")
+    with pytest.raises(Exception, match="not both"):
+        build("type lines; x (1); follow crest;")
+
+
+# --- run-up ------------------------------------------------------------------------------------
+def test_run_up_on_a_wall():
+    wall = 2.0
+    x, y = lattice(lambda s: np.full_like(s, D), length=wall)
+    assert waves.wall_run_up(x, y, wall, DX, still=D) == 0.0           # still water
+    # water piled against the wall: the last two columns reach D + 0.2
+    x2, y2 = lattice(lambda s: np.where(s > wall - 2 * DX, D + 0.2, D), length=wall)
+    assert waves.wall_run_up(x2, y2, wall, DX, still=D) == pytest.approx(0.2)
+    # a jet 3 dx from the wall is not in contact
+    x3, y3 = np.append(x, wall - 3 * DX), np.append(y, D + 0.5)
+    assert waves.wall_run_up(x3, y3, wall, DX, still=D) == 0.0
+
+
+def test_run_up_on_a_beach():
+    ang = 10.0
+    t = math.tan(math.radians(ang))
+    start = (1.0, 0.0)
+    slope = lambda s: np.maximum(0.0, (s - start[0]) * t)           # noqa: E731
+    # still water over the beach, particles at least dx/2 above the slope line
+    x, y = lattice(lambda s: np.full_like(s, D), length=8.0)
+    keep = y - slope(x) >= 0.5 * DX / math.cos(math.radians(ang))
+    x, y = x[keep], y[keep]
+    r0 = waves.beach_run_up(x, y, start, ang, DX, still=D)
+    assert r0 == 0.0
+    # a tongue of water one particle thick, dx/2 above the slope, up to elevation D + 0.15
+    s = np.arange(0.0, 10.0, DX)
+    n = 0.5 * DX
+    a = math.radians(ang)
+    tx, ty = start[0] + s * math.cos(a) - n * math.sin(a), start[1] + s * math.sin(a) + \
+        n * math.cos(a)
+    tip = ty <= D + 0.15
+    tx, ty = tx[tip & (ty > D)], ty[tip & (ty > D)]
+    r = waves.beach_run_up(np.append(x, tx), np.append(y, ty), start, ang, DX, still=D)
+    assert r == pytest.approx(ty.max() + DX / 2 - D)
+    assert 0.15 - DX < r <= 0.15 + DX / 2
+    # spray well above the slope does not count; a beach shorter than the tongue cuts it
+    sx, sy = np.append(x, 6.0), np.append(y, D + 1.0)
+    assert waves.beach_run_up(sx, sy, start, ang, DX, still=D) == 0.0
+    short = waves.beach_run_up(np.append(x, tx), np.append(y, ty), start, ang, DX, still=D,
+                               length=(D - start[1]) / math.sin(a))
+    assert short < r
+
+
+def test_run_up_object(tmp_path):
+    case, ctx = fake_case(tmp_path)
+    wall = 2.0
+    fo = build(f"type runUp; mode wall; x {wall}; still {D};")
+    fo.start(case, ctx, "0.5")
+    for t, extra in ((0.5, 0.0), (0.6, 0.2), (0.7, 0.1)):
+        x, y = lattice(lambda s: np.where(s > wall - 2 * DX, D + extra, D), length=wall)
+        fo.execute(FakeSim(x, y, time=t))
+    fo.end()
+    _, cols, data = read_dat(tmp_path / "postProcessing/fo/0.5/fo.dat")
+    assert cols == ["time", "runUp", "maxRunUp"]
+    np.testing.assert_allclose(data, [[0.5, 0.0, 0.0], [0.6, 0.2, 0.2], [0.7, 0.1, 0.2]],
+                               atol=1e-12)
+    beach = build("type runUp; mode beach; start (1 0); angle 10;")
+    assert beach.coeffs.start == (1.0, 0.0)
+    with pytest.raises(Exception, match="start"):
+        build("type runUp; mode beach;")
+    with pytest.raises(Exception, match="wall position"):
+        build("type runUp; mode wall;")
+
+
+# --- crest tracker -----------------------------------------------------------------------------
+def test_crest_tracker_celerity(tmp_path):
+    """A sech^2 wave translated at c over a fixed lattice (its surface quantised to dx): the
+    fitted celerity is within 0.5 %, x_c within a fraction of dx, eta_c within dx/2."""
+    case, ctx = fake_case(tmp_path)
+    c = 1.7
+    fo = build("type crestTracker; xMin 0.01; xMax 19.99; still 1; fitFrom 4; fitTo 16;")
+    fo.start(case, ctx, "0")
+    times = np.linspace(0.0, 8.0, 17)
+    for t in times:
+        x, y = lattice(lambda s, t=t: D + eta_sech2(s, 3.0 + c * t))
+        fo.execute(FakeSim(x, y, time=t))
+    fo.end()
+    _, cols, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    assert cols == ["time", "xCrest", "etaCrest", "c"] and data.shape == (17, 4)
+    np.testing.assert_allclose(data[:, 1], 3.0 + c * times, atol=0.5 * DX)
+    np.testing.assert_allclose(data[:, 2], A, atol=0.5 * DX)
+    np.testing.assert_allclose(data[:, 3], c, rtol=0.05)      # instantaneous, central differences
+    _, scols, summary = read_dat(tmp_path / "postProcessing/fo/0/celerity.dat")
+    assert scols[:3] == ["c", "x0", "etaMean"]
+    row = dict(zip(scols, summary[0]))
+    assert row["c"] == pytest.approx(c, rel=0.005)
+    sel = (3.0 + c * times >= 4.0) & (3.0 + c * times <= 16.0)
+    assert row["nSamples"] == np.count_nonzero(sel)
+    assert row["x0"] == pytest.approx(3.0, abs=DX)
+
+
+def test_crest_of_sampled_surface():
+    g = np.linspace(0.0, 20.0, 2001)
+    xc, ec = waves.crest(g, eta_sech2(g, 7.123))
+    assert xc == pytest.approx(7.123, abs=1e-3)         # a tenth of the gauge spacing
+    assert ec == pytest.approx(A, rel=1e-4)
+    assert waves.crest(g, np.zeros_like(g)) == (0.0, 0.0)       # flat: no crest to refine
+    assert waves.fit_celerity([0.0, 1.0, 2.0], [1.0, 2.5, 4.0])[:2] == pytest.approx((1.5, 1.0))
+    assert np.isnan(waves.fit_celerity([1.0], [2.0])[0])
