@@ -152,6 +152,36 @@ def models(family: Optional[str] = typer.Argument(None, help="only this family")
         console.print(t)
 
 
+@app.command()
+def sample(case: Path = typer.Argument(Path("."), help="case directory"),
+           func: Optional[list[str]] = typer.Option(None, "--func", "-f",
+                                                    help="only this function object")):
+    """Evaluate function objects of system/controlDict on the written time directories."""
+    from sphfoam.postprocess import sample as do_sample
+
+    c = _case(case)
+    _guard(do_sample, c.path, func, log=console.print)
+
+
+@app.command()
+def plot(case: Path = typer.Argument(Path("."), help="case directory"),
+         theory: str = typer.Option("mcCowan", "--theory", help="wave theory to compare with "
+                                    "(sphfoam models waveTheory)"),
+         func: Optional[str] = typer.Option(None, "--func", "-f",
+                                            help="the waveGauges object (default: the first)"),
+         height: Optional[float] = typer.Option(None, help="wave height H (default: from "
+                                                "the Goring paddle or constant/waveProperties)"),
+         depth: Optional[float] = typer.Option(None, help="still water depth d")):
+    """PNG of the wave gauges against a solitary-wave theory aligned at the first gauge."""
+    from sphfoam import registry
+    from sphfoam.postprocess import plot_gauges
+
+    c = _case(case)
+    if theory not in registry.names("waveTheory"):
+        _fail("bad option", f"--theory: {str(registry.UnknownModel('waveTheory', theory, registry.names('waveTheory')))}")
+    _guard(plot_gauges, c.path, theory, func, height, depth, log=console.print)
+
+
 @export_app.command("vtk")
 def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
                time: Optional[list[float]] = typer.Option(None, "--time", "-t",

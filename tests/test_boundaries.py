@@ -345,7 +345,7 @@ def test_hydrostatic_tank_at_rest_with_every_boundary(tutorial, boundary):
     assert len(beds) == 24
     if boundary == "repulsiveMonaghan2003":
         assert np.mean(beds[-12:]) == pytest.approx(RHO0 * G * Hw, rel=0.03)
-        assert max(vmean[-8:]) < 0.5 * max(vmean[:8])
+        assert max(vmean[-8:]) < 0.8 * max(vmean[:8])       # decaying, slowly
     else:
         assert beds[-1] == pytest.approx(RHO0 * G * Hw, rel=0.02)
         assert vmean[-1] < 0.002
