@@ -9,7 +9,7 @@ from sphfoam.case import foamdict
 
 #: what a clone leaves behind: results of the source case
 RESULTS = ("[1-9]*", "0.*", "postProcessing", "VTK", "log.*", "lagrangian", "uniform",
-           "compare")
+           "compare", "runUp")
 
 
 def set_entry(case: Path, rel: str, key: str, value) -> None:
