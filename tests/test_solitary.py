@@ -53,3 +53,37 @@ def test_solitary_wave_from_theory_keeps_height_and_celerity_over_ten_depths(tut
     assert fit[0, 0] == pytest.approx(kdv2.c, rel=0.03)
     s = read_state(list_times(case)[-1][1])
     assert (s["type"] == 0).sum() == f.sum()
+
+
+def test_sample_adds_gauges_after_a_run_and_plot_compares_them_with_theory(tutorial):
+    """``sphfoam sample -f NAME`` evaluates a function object added after the run on every
+    written time; ``sphfoam plot`` draws the gauges against a theory and tabulates heights."""
+    from typer.testing import CliRunner
+
+    from sphfoam.case.edit import set_entry
+    from sphfoam.cli import app
+
+    case = tutorial("solitaryWallRunup", {
+        "system/particleDict:dx": 2.5,
+        "system/controlDict:endTime": 0.4, "system/controlDict:writeInterval": 0.1,
+        "system/controlDict:functions": {}})
+    run_case(case, progress=False, echo=None)
+    times = [t for t, _ in list_times(case)]
+    assert len(times) == 5
+    set_entry(case, "system/controlDict", "functions",
+              {"late": {"type": "waveGauges", "x": [-20.0, 0.0, 20.0], "still": 10.0}})
+    runner = CliRunner()
+    res = runner.invoke(app, ["sample", str(case), "-f", "late"])
+    assert res.exit_code == 0, res.output
+    rows = np.loadtxt(case / "postProcessing" / "late" / "0" / "late.dat", ndmin=2)
+    np.testing.assert_allclose(rows[:, 0], times)
+    # the crest (x0 = 0) reads close to A = 3 m at t = 0 (coarse: 4 particles per depth)
+    assert rows[0, 2] == pytest.approx(3.0, abs=0.5 * 2.5)
+    assert rows[0, 1] < rows[0, 2] and rows[0, 3] < rows[0, 2]
+    res = runner.invoke(app, ["plot", str(case), "--theory", "kdv2"])
+    assert res.exit_code == 0, res.output
+    assert (case / "postProcessing" / "late" / "0" / "late_kdv2.png").is_file()
+    table = np.loadtxt(case / "postProcessing" / "late" / "0" / "late_height.dat", ndmin=2)
+    assert table.shape == (3, 5)
+    res = runner.invoke(app, ["sample", str(case), "-f", "nope"])
+    assert res.exit_code != 0 and "late" in res.output
