@@ -8,6 +8,8 @@ its particleDict position, which is the position at t = 0.
 
 from __future__ import annotations
 
+import abc
+
 from pathlib import Path
 from typing import Any, Literal
 
@@ -19,17 +21,19 @@ from sphfoam.case.schemas import Vector2
 from sphfoam.registry import Coeffs, Model, register
 
 
-class Motion(Model):
+class Motion(Model, abc.ABC):
     family = "motion"
 
     def resolve(self, case_path: Path) -> None:
         """Load whatever the motion reads from the case (e.g. a table file)."""
 
+    @abc.abstractmethod
     def displacement(self, t: float) -> tuple[float, float]:
-        raise NotImplementedError
+        ...
 
+    @abc.abstractmethod
     def velocity(self, t: float) -> tuple[float, float]:
-        raise NotImplementedError
+        ...
 
 
 @register

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import abc
+
 import math
 
 from pydantic import Field
@@ -9,16 +11,16 @@ from pydantic import Field
 from sphfoam.registry import Coeffs, Model, register
 
 
-class WaveMaker(Model):
+class WaveMaker(Model, abc.ABC):
     family = "waveMaker"
 
+    @abc.abstractmethod
     def position(self, t: float) -> float:
         """Paddle displacement X(t) from its rest position (m)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def velocity(self, t: float) -> float:
         """dX/dt (m/s)."""
-        raise NotImplementedError
 
 
 @register

@@ -12,6 +12,8 @@ text says "from the still water level"; they are implemented with z from the bed
 
 from __future__ import annotations
 
+import abc
+
 import math
 
 import numpy as np
@@ -26,7 +28,7 @@ def _sech(y):
     return 1.0 / np.cosh(np.minimum(np.abs(y), 700.0))
 
 
-class SolitaryWave:
+class SolitaryWave(abc.ABC):
     """A solitary wave of height ``A`` in depth ``d``; subclasses give ``_eta(X)``,
     ``_u(X, z)``, ``_w(X, z)`` and, when the theory has one, ``_p(X, z)``.  Without an explicit
     dynamic pressure the pressure is hydrostatic below the local surface,
@@ -46,17 +48,21 @@ class SolitaryWave:
     #: spatial decay rate (1/m) of eta far from the crest, eta ~ exp(-decay |X|)
     decay: float
 
+    @abc.abstractmethod
     def _celerity(self) -> float:
-        raise NotImplementedError
+        ...
 
+    @abc.abstractmethod
     def _eta(self, X):
-        raise NotImplementedError
+        ...
 
+    @abc.abstractmethod
     def _u(self, X, z):
-        raise NotImplementedError
+        ...
 
+    @abc.abstractmethod
     def _w(self, X, z):
-        raise NotImplementedError
+        ...
 
     def _p(self, X, z):
         return self.rho * self.g * (self.d + self._eta(X) - z)
