@@ -16,11 +16,11 @@ from scipy.spatial import cKDTree
 
 from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.setup.geometry import (distance_to_walls, fluid_side, lattice_offsets,
+                                    polylines_of, segments_of, wall_metadata)
 from sphfoam.setup.waves import fields as wave_fields
 from sphfoam.setup.waves import surface as wave_surface
 from sphfoam.setup.waves import wave_columns
-from sphfoam.setup.geometry import (distance_to_walls, fluid_side, lattice_offsets,
-                                    polylines_of, segments_of, wall_metadata)
 
 
 def _lattice(lo, hi, dx):
@@ -99,8 +99,8 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     """Particles of a case at rest in hydrostatic equilibrium.
 
     ``boundary`` (the selected boundary model) decides where wall particles go
-    (``wall_placement``: rows behind the walls or none; ``wall_layers``: how many) and which per-wall-
-    particle fields are stored (``wall_fields``: normal, distance behind the wall, corner
+    (``wall_placement``: rows behind the walls or none; ``wall_layers``: how many) and which
+    per-wall-particle fields are stored (``wall_fields``: normal, distance behind the wall, corner
     flag, fully-wet pair count ``nFull`` for a support of ``support_radius``). ``moving``
     adds the wall entry index ``patch`` and the initial positions ``x0, y0`` that prescribed
     motions displace. ``waves`` (pairs of InitialWave and theory model, from
