@@ -82,7 +82,7 @@ def test_dam_break_follows_martin_moyce(tutorial):
     run_case(case, progress=False, echo=None)
     dat = case / "postProcessing" / "front" / "0" / "front.dat"
     rows = np.loadtxt(dat)
-    assert rows.shape[1] == 6 and rows[0, 0] == 0.0
+    assert rows.shape[1] == 8 and rows[0, 0] == 0.0      # time T z Z h H stuck gap
     T, Z, Hn = rows[:, 1], rows[:, 3], rows[:, 5]
     assert np.all(np.diff(Z) >= -1e-9), "front moved backwards"
     front, height = martin_moyce()

@@ -149,11 +149,8 @@ class Simulation:
         sort by cell."""
         st = self.state
         self._fld = None
-        if self.mirror:
-            if (st.kind == GHOST).any():
-                st.keep(st.kind != GHOST)
-            self.pushed_back += gh.push_back(st.x, st.y, st.u, st.v, st.kind, self.seg,
-                                             self.reach)
+        if self.mirror and (st.kind == GHOST).any():
+            st.keep(st.kind != GHOST)
         cell, outside = self.cells.bin(st.x, st.y)
         if outside:
             gone = cell < 0
@@ -262,6 +259,12 @@ class Simulation:
         dt = self.integrator.step(self, dt_remaining)
         self.time += dt
         self.step_index += 1
+        if self.mirror:
+            # a particle that crossed a mirror wall during the step goes back before anything
+            # (a write, a function object, the next step) sees it
+            st = self.state
+            self.pushed_back += gh.push_back(st.x, st.y, st.u, st.v, st.kind, self.seg,
+                                             self.reach)
         return dt
 
     def pressure(self) -> np.ndarray:
