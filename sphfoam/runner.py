@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam import __version__, registry
+from sphfoam import __version__
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError

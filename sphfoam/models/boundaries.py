@@ -24,8 +24,6 @@ of a point rather than of a wall); its neighbours along either wall act with the
 
 from __future__ import annotations
 
-import math
-
 from pydantic import Field
 
 from sphfoam.models.base import CaseContext, PipelineModel

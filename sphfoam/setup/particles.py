@@ -160,7 +160,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
             if r is None:
                 continue
             sel = regf == i
-            (x0, bed), (_, top) = r.min, r.max
+            bed, top = r.min[1], r.max[1]
             uf[sel], vf[sel], pf[sel] = wave_fields(xf[sel], yf[sel], bed, top - bed, waves,
                                                     gmag, ctx.rho0)
             eta_f[sel] = top + wave_surface(xf[sel], top - bed, waves, gmag)
