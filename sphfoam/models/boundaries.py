@@ -156,9 +156,6 @@ class _Repulsive(Boundary):
     def wall_body(self, continuity: str) -> str:
         return ""
 
-    def selection_key(self) -> str:
-        return f"noSlip={self.coeffs.noSlip}"
-
 
 def _indent(code: str) -> str:
     return "\n".join("    " + ln for ln in code.strip("\n").splitlines()) or "    pass"
@@ -235,9 +232,6 @@ class MirrorGhosts(Boundary):
         noSlip: bool = Field(False, description="reflect the tangential velocity too "
                              "(no-slip); no: T(3.79), free slip as in P section 4")
 
-    def selection_key(self) -> str:
-        return f"noSlip={self.coeffs.noSlip}"
-
 
 @register
 class Hybrid(Boundary):
@@ -274,9 +268,6 @@ class Hybrid(Boundary):
         return {"bnd_dx": ctx.dx, "bnd_range": ctx.dx, "bnd_ymin": 0.02 * ctx.dx,
                 "bnd_a0": 0.01 * ctx.c0 ** 2 / ctx.h, "bnd_c0": ctx.c0,
                 "bnd_frac": self.coeffs.wetFraction, "bnd_rho0": ctx.rho0}
-
-    def selection_key(self) -> str:
-        return f"noSlip={self.coeffs.noSlip}"
 
     step_init = "bnd_count = 0"
     step_pair = "if kindb == FLUID:\n    bnd_count += 1"
