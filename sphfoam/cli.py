@@ -78,6 +78,7 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
                                                  help="stop here instead of endTime"),
         no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar")):
     """Run CASE from its start time (setting up particles first if 0/ has none)."""
+    from sphfoam.engine.health import BlowUp
     from sphfoam.runner import run_case
 
     _threads(threads)
@@ -85,6 +86,10 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
     try:
         rep = _guard(run_case, c, progress=not no_progress and sys.stderr.isatty(),
                      echo=console.print, end_time=end_time)
+    except BlowUp as e:
+        if _state["debug"]:
+            raise
+        _fail("blow-up", _blow_up_text(e.diagnosis, c.path), code=3)
     except KeyboardInterrupt:
         err_console.print("[yellow]interrupted: the current state was written; "
                           "`sphfoam run` continues from it (startFrom latestTime).")
@@ -93,6 +98,27 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
                   f"{rep.run_seconds:.1f} s + compile {rep.compile_seconds:.1f} s "
                   f"({'cached' if rep.cache_hit else 'cold'}); "
                   f"{rep.particle_steps_per_second:.3g} particle-steps/s")
+
+
+def _blow_up_text(d, path: Path) -> str:
+    """One screen: what diverged, when, where, which particles, where to look next."""
+    from rich.markup import escape
+
+    lines = [f"what:      {d.title} ({d.kind})", f"           {d.message}",
+             f"when:      step {d.step}, time {d.fail_time:.6g} s "
+             f"(last good time {d.time:.6g} s)"]
+    if d.where is not None:
+        lines.append(f"where:     {d.where}")
+    if d.ids:
+        more = f" (first {len(d.ids)} of {d.count})" if d.count > len(d.ids) else ""
+        lines.append(f"particles: ids {' '.join(map(str, d.ids))}{more}")
+    if d.last_good:
+        lines.append(f"last good: {path / d.last_good}  (`sphfoam run` restarts from it "
+                     f"with startFrom latestTime)")
+    if d.file:
+        lines.append(f"diagnosis: {d.file}")
+    lines.append(f"log:       {path / 'log.sphfoam'}")
+    return escape("\n".join(lines))
 
 
 @app.command()
@@ -180,6 +206,71 @@ def plot(case: Path = typer.Argument(Path("."), help="case directory"),
     if theory not in registry.names("waveTheory"):
         _fail("bad option", f"--theory: {str(registry.UnknownModel('waveTheory', theory, registry.names('waveTheory')))}")
     _guard(plot_gauges, c.path, theory, func, height, depth, log=console.print)
+
+
+@app.command()
+def study(studydict: Path = typer.Argument(..., help="study dictionary"),
+          jobs: Optional[int] = typer.Option(None, "--jobs", "-n",
+                                             help="runs at once (default: the dictionary's jobs)"),
+          scheduler: Optional[str] = typer.Option(None, "--scheduler",
+                                                  help="Dask scheduler address (tcp://host:8786)"),
+          only: Optional[list[str]] = typer.Option(None, "--only", help="only this variant"),
+          rerun: bool = typer.Option(False, "--rerun", help="rerun runs that have a result"),
+          dry_run: bool = typer.Option(False, "--dry-run",
+                                       help="list the runs and their overrides; run nothing"),
+          collect_only: bool = typer.Option(False, "--collect",
+                                            help="only rebuild the tables and plot")):
+    """Run a study: the base case's variants x resolutions, in parallel; CSV, Markdown table
+    (runtime relative to the baseline, like T Table 4.3) and an error-vs-cost Pareto plot."""
+    from sphfoam import study as st
+
+    s = _guard(st.load, studydict, only)
+    if dry_run:
+        t = Table(title=f"{studydict.name}: {len(s.runs)} run(s) in {s.root}")
+        for c in ("run", "dx", "overrides"):
+            t.add_column(c)
+        for r in st.dump(s):
+            t.add_row(r["name"], "" if r["dx"] is None else f"{r['dx']:g}",
+                      "; ".join(f"{k} {v}" for k, v in r["edits"].items()))
+        console.print(t)
+        return
+    if collect_only:
+        rows = st.collect(s)
+    else:
+        rows = _guard(st.run_study, s, jobs=jobs, scheduler=scheduler, rerun=rerun,
+                      log=console.print)
+    console.print((s.root / "study.md").read_text() if rows else "no results yet")
+
+
+@app.command()
+def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
+            keep_going: bool = typer.Option(False, "--keep-going", "-k",
+                                            help="show a metric that cannot be evaluated as "
+                                            "NaN instead of stopping")):
+    """Error metrics of system/metricsDict for the finished run in CASE."""
+    import math
+
+    from sphfoam.models.metrics import load_metrics
+
+    c = _case(case)
+    mset = _guard(load_metrics, c.path)
+    values = _guard(mset.evaluate, c.path, strict=not keep_going)
+
+    def num(v, fmt):
+        return "-" if v is None else ("nan" if not math.isfinite(v) else format(v, fmt))
+
+    t = Table(title=f"{c.name}: metrics (system/metricsDict)", title_justify="left")
+    for col in ("metric", "type", "value", "reference", "error %", "unit"):
+        t.add_column(col, justify="right" if col in ("value", "reference", "error %")
+                     else "left")
+    for name, mv in values.items():
+        label = f"{name} (pareto)" if name == mset.pareto else name
+        t.add_row(label, mset.metrics[name].name, num(mv.value, ".6g"),
+                  num(mv.reference, ".6g"), num(mv.error, "+.3f"), mv.unit)
+    console.print(t)
+    for name, mv in values.items():
+        if mv.problem:
+            err_console.print(f"[yellow]{name}[/]: {mv.problem}")
 
 
 @export_app.command("vtk")

@@ -407,6 +407,15 @@ def dictionaries_markdown() -> str:
             intro = "Optional: a case without this file gets every default below."
         parts.append(_schema_section(schema, rel, 2, intro))
     parts.append(_sph_properties_section())
+    parts.append(_schema_section(schemas.MetricsDict, "system/metricsDict", 2,
+                                 "Optional: the error metrics of a finished run against its "
+                                 "reference (`sphfoam metrics`, `sphfoam study`); the metric "
+                                 "types are in [models.md](models.md#metric)."))
+    from sphfoam.study import StudyDict
+
+    parts.append(_schema_section(StudyDict, "study dictionary (sphfoam study)", 2,
+                                 "A file of any name beside the base case, run by `sphfoam "
+                                 "study FILE`; see the user guide's *Studies* section."))
     return "\n".join(parts).rstrip("\n") + "\n"
 
 
@@ -430,6 +439,18 @@ def _where_selected(fam: str) -> str:
     if fam == "functionObject":
         return ("Selected in `system/controlDict` as `functions { name { type ...; } }`; "
                 "output in `postProcessing/<name>/<startTime>/<name>.dat`.")
+    if fam == "metric":
+        return ("Selected in `system/metricsDict` as `metrics { name { type ...; } }` (or in a "
+                "study dictionary's `metrics`); `sphfoam metrics CASE` evaluates them after a "
+                "run and `sphfoam study` tabulates them per variant.")
+    if fam == "motion":
+        return "Selected in `system/particleDict` as `walls { name { motion { type ...; } } }`."
+    if fam == "waveMaker":
+        return ("Selected inside a `pistonPaddle` motion as `waveMaker { type ...; }`.")
+    if fam == "waveTheory":
+        return ("Selected in `constant/waveProperties` as `waves { name { theory ...; } }` "
+                "(initial waves), by a `celerity` metric's `theory`, and by `sphfoam plot "
+                "--theory`.")
     return "Not yet selectable from a case."
 
 

@@ -34,6 +34,7 @@ FAMILIES: dict[str, str] = {
     "waveMaker": "paddle trajectory X(t) of a wave maker (pistonPaddle waveMaker)",
     "waveTheory": "solitary-wave theory: surface, velocity, pressure and celerity",
     "functionObject": "in-run and post-processing sampling",
+    "metric": "error metric of a finished run against its reference (sphfoam study)",
 }
 
 

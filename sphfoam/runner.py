@@ -21,6 +21,7 @@ from sphfoam.case.errors import CaseError
 from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.case.times import list_times, time_name
 from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.health import BlowUp, Diagnosis, HealthMonitor
 from sphfoam.engine.simulation import Simulation
 from sphfoam.case.case import SPH_PROPERTIES
 from sphfoam.engine.state import GHOST, WALL, ParticleState
@@ -57,6 +58,8 @@ class RunReport:
     run_seconds: float
     written: list[str] = field(default_factory=list)
     removed: int = 0
+    #: why the run stopped early (see sphfoam.engine.health), None if it reached its end
+    failure: Diagnosis | None = None
 
     @property
     def particle_steps_per_second(self) -> float:
@@ -215,6 +218,8 @@ def _run(case, c, log, progress, t_end) -> RunReport:
 
     report = RunReport(t0, t_end, 0, state.n, sim.pipeline.compile_seconds,
                        sim.pipeline.cache_hit, 0.0)
+    monitor = HealthMonitor.from_case(case)
+    monitor.start(sim)
     written: list[Path] = []
     interval = c.writeInterval
     eps = 1e-9 * max(interval, 1e-300)
@@ -237,6 +242,11 @@ def _run(case, c, log, progress, t_end) -> RunReport:
             if landed:
                 sim.time = target          # land exactly, so restarts see the same time
             report.steps += 1
+            diagnosis = monitor.check(sim, dt, landed)
+            if diagnosis is not None:      # nothing of this step is written or sampled
+                report.failure = diagnosis
+                _blow_up(case, sim, monitor, diagnosis, start_name, log)
+                raise BlowUp(diagnosis, report)
             wrote = False
             if c.writeControl == "timeStep":
                 wrote = sim.step_index % int(interval) == 0
@@ -252,8 +262,6 @@ def _run(case, c, log, progress, t_end) -> RunReport:
             for fo in functions.values():
                 if fo.due(sim, wrote):
                     fo.execute(sim)
-            if not np.isfinite(dt) or dt <= 0:
-                raise FloatingPointError(f"time step collapsed to {dt} at time {sim.time}")
             bar.update(sim, dt)
     except KeyboardInterrupt:
         # Ctrl-C only raises a flag (see _StopRequest), so the state here is a whole step
@@ -264,7 +272,7 @@ def _run(case, c, log, progress, t_end) -> RunReport:
         stop.restore()
         bar.close()
         report.run_seconds = wallclock.perf_counter() - wall0
-        report.end_time = sim.time
+        report.end_time = sim.time if report.failure is None else report.failure.time
         report.particles = int(np.count_nonzero(sim.state.kind != GHOST))
         report.removed = sum(r.count for r in sim.removals)
         report.written = [p.name for p in written]
@@ -275,6 +283,43 @@ def _run(case, c, log, progress, t_end) -> RunReport:
         f"removed {report.removed} particle(s)"
         + (f"; {sim.pushed_back} put back across a mirror wall" if sim.pushed_back else ""))
     return report
+
+
+def _blow_up(case, sim, monitor: HealthMonitor, diagnosis: Diagnosis, start_name: str,
+             log) -> None:
+    """Write the last good state and the diagnosis, and log it (the caller raises)."""
+    snap = monitor.snapshot
+    c = case.control
+    name = None
+    for prec in range(c.timePrecision, 18):
+        candidate = time_name(snap.time, prec)
+        folder = case.path / candidate
+        if not has_particles(folder):
+            name = candidate
+            break
+        t, index = read_time_value(folder)
+        if index == snap.step and math.isclose(t, snap.time, rel_tol=1e-12, abs_tol=1e-300):
+            break                  # written already (a write time or the start): the same state
+    else:
+        name = time_name(snap.time, 17)
+    if name is not None:
+        folder = write_time(case, snap.state(), snap.time, snap.step, snap.dt,
+                            p=snap.pressure(sim), name=name)
+    diagnosis.last_good = folder.name
+    out = case.path / "postProcessing" / "stability" / start_name
+    out.mkdir(parents=True, exist_ok=True)
+    dat = out / "diagnosis.dat"
+    rows = diagnosis.entries()
+    width = max(len(k) for k, _ in rows) + 4
+    dat.write_text(f"# sphfoam {__version__}: stability diagnosis of case {case.path}\n"
+                   f"# the run stopped at time {diagnosis.fail_time:.9g} "
+                   f"(step {diagnosis.step}): {diagnosis.title}\n"
+                   f"# key value\n" + "".join(f"{k:<{width}}{v}\n" for k, v in rows))
+    diagnosis.file = str(dat)
+    for line in diagnosis.lines():
+        log(f"BLOW-UP: {line}")
+    log(f"BLOW-UP: diagnosis written to {dat.relative_to(case.path)}; `sphfoam run` with "
+        f"startFrom latestTime restarts from time {folder.name}")
 
 
 def _write(case, sim, log) -> Path:

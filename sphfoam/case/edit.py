@@ -9,7 +9,7 @@ from sphfoam.case import foamdict
 
 #: what a clone leaves behind: results of the source case
 RESULTS = ("[1-9]*", "0.*", "postProcessing", "VTK", "log.*", "lagrangian", "uniform",
-           "compare", "runUp")
+           "compare", "runUp", "study", "studySmall", "stability")
 
 
 def set_entry(case: Path, rel: str, key: str, value) -> None:
@@ -28,13 +28,13 @@ def set_entry(case: Path, rel: str, key: str, value) -> None:
     foamdict.write(path, d, header=header)
 
 
-def clone_case(src: Path, dst: Path, edits: dict | None = None) -> Path:
-    """Copy the dictionaries of ``src`` (no results) to ``dst`` and apply
-    ``{"file:key.path": value}`` edits."""
+def clone_case(src: Path, dst: Path, edits: dict | None = None, ignore=()) -> Path:
+    """Copy the dictionaries of ``src`` (no results, nothing matching ``ignore``) to ``dst``
+    and apply ``{"file:key.path": value}`` edits."""
     dst = Path(dst)
     if dst.exists():
         shutil.rmtree(dst)
-    shutil.copytree(src, dst, ignore=shutil.ignore_patterns(*RESULTS))
+    shutil.copytree(src, dst, ignore=shutil.ignore_patterns(*RESULTS, *ignore))
     for where, value in (edits or {}).items():
         rel, key = where.split(":")
         set_entry(dst, rel, key, value)

@@ -54,6 +54,39 @@ def dimensioned(dims: tuple[int, ...]):
 
 
 # --- system/controlDict -------------------------------------------------------------------
+class StabilityChecks(Strict):
+    """Cheap checks after every step (sphfoam.engine.health): a run that diverges stops with a
+    diagnosis in the log and postProcessing/stability/, and its last good state is written as
+    a time directory. The defaults never fire on a healthy weakly-compressible run."""
+
+    enabled: bool = Field(True, description=(
+        "no: skip the checks (a non-finite or non-positive time step still stops the run, "
+        "which would otherwise never end)"))
+    densityRatio: tuple[float, float] = Field((0.5, 2.0), description=(
+        "(lo hi): a fluid particle with rho/rho0 outside this range has diverged; weakly-"
+        "compressible SPH keeps it within a few per cent (densityVariation, T(3.31))"))
+    maxSpeed: float = Field(1.0, gt=0, description=(
+        "a fluid particle faster than maxSpeed c0 (the artificial speed of sound, 10 vmax) is "
+        "escaping"))
+    maxEscaped: float = Field(0.05, gt=0, le=1, description=(
+        "largest fraction of the fluid particles at the start of the run that may leave the "
+        "domain box"))
+    minDeltaT: float = Field(1e-3, gt=0, lt=1, description=(
+        "smallest time step, as a fraction of the first step of the run, before the step is "
+        "said to have collapsed"))
+    maxKineticEnergy: float = Field(4.0, gt=0, description=(
+        "largest fluid kinetic energy in units of M (c0/10)^2 / 2 (M: fluid mass; c0/10 = vmax "
+        "by construction), i.e. an RMS speed above sqrt(maxKineticEnergy) vmax"))
+
+    @field_validator("densityRatio")
+    @classmethod
+    def _ratio(cls, v):
+        lo, hi = v
+        if not (0 < lo < 1 < hi and math.isfinite(hi)):
+            raise ValueError("densityRatio must be (lo hi) with 0 < lo < 1 < hi")
+        return v
+
+
 class ControlDict(Strict):
     application: str = "sphfoam"
     startFrom: Literal["startTime", "latestTime"] = "latestTime"
@@ -73,6 +106,9 @@ class ControlDict(Strict):
     writePrecision: int = Field(6, ge=1, le=17)
     timePrecision: int = Field(6, ge=1, le=17)
     functions: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    stability: StabilityChecks = Field(default_factory=StabilityChecks, description=(
+        "blow-up detection after every step: { enabled yes; densityRatio (0.5 2); maxSpeed 1; "
+        "maxEscaped 0.05; minDeltaT 1e-3; maxKineticEnergy 4; }"))
 
     @model_validator(mode="after")
     def _check(self):
@@ -258,3 +294,26 @@ class WaveProperties(Strict):
 
     waves: dict[str, InitialWave] = Field(default_factory=dict, description=(
         "named waves, each { theory ...; height ...; x0 ...; direction 1; }"))
+
+
+# --- system/metricsDict --------------------------------------------------------------------
+class MetricsDict(Strict):
+    """Error metrics of a finished run against its reference (``sphfoam metrics``,
+    ``sphfoam study``): each reads what a function object of system/controlDict wrote."""
+
+    metrics: dict[str, dict[str, Any]] = Field(min_length=1, description=(
+        "named metrics, each { type <metric>; function <object>; ... } (sphfoam models "
+        "metric), e.g. `H18 { type waveHeight; function gauges; x 18; reference 0.15; }`"))
+    pareto: str | None = Field(None, description=(
+        "the metric whose |error| a study plots against cost; one of `metrics`"))
+
+    @field_validator("pareto")
+    @classmethod
+    def _pareto(cls, v, info):
+        from sphfoam.case.errors import did_you_mean
+
+        names = list(info.data.get("metrics") or {})
+        if v is not None and names and v not in names:
+            raise ValueError(f"'{v}' is not one of the metrics{did_you_mean(v, names) or ';'} "
+                             f"metrics: {', '.join(names)}")
+        return v

@@ -14,9 +14,10 @@ from numba import njit, prange
 _JIT = dict(cache=True, fastmath=True)
 
 
-@njit(**_JIT)
+@njit(cache=True)   # no fastmath: a NaN or infinite position must fail the range test
 def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
-    """Cell index of every particle; -1 marks a particle outside the domain box.
+    """Cell index of every particle; -1 marks a particle outside the domain box (or with a
+    non-finite position: the range test is done on the float, before any conversion to int).
 
     ``lx`` (``ly``) > 0 makes the axis periodic: positions are wrapped into the box first.
     """
@@ -27,13 +28,13 @@ def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
             x[a] = x0 + (x[a] - x0) % lx
         if ly > 0.0:
             y[a] = y0 + (y[a] - y0) % ly
-        ix = int(np.floor((x[a] - x0) * inv_cell))
-        iy = int(np.floor((y[a] - y0) * inv_cell))
-        if ix < 0 or iy < 0 or ix >= ncx or iy >= ncy or not (np.isfinite(x[a]) and np.isfinite(y[a])):
+        fx = (x[a] - x0) * inv_cell
+        fy = (y[a] - y0) * inv_cell
+        if fx >= 0.0 and fx < ncx and fy >= 0.0 and fy < ncy:
+            cell[a] = int(fy) * ncx + int(fx)
+        else:
             cell[a] = -1
             outside += 1
-        else:
-            cell[a] = iy * ncx + ix
     return outside
 
 

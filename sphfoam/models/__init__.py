@@ -13,6 +13,7 @@ from sphfoam.models import (  # noqa: F401
     goring,
     integrators,
     kernels,
+    metrics,
     motion,
     noop,
     turbulence,
