@@ -356,3 +356,21 @@ def test_cli_prints_the_table(flume):
     assert res.exit_code == 2 and "system/metricsDict" in res.output
     res = runner.invoke(app, ["metrics", "-k", str(flume)])
     assert res.exit_code == 0 and "nan" in res.output
+
+
+def test_wave_height_defaults_to_the_case_wave(tmp_path):
+    """Without a reference, waveHeight compares with the case's own wave: the Goring
+    paddle's H in the flume, the initial wave's A in the wall case."""
+    from sphfoam.case.edit import clone_case
+
+    flume = clone_case(TUTORIALS / "solitaryWave", tmp_path / "flume")
+    write_gauges(flume)
+    (v,) = evaluate_metrics(flume, {"H": {"type": "waveHeight", "x": 18}}).values()
+    assert v.reference == 0.15
+    assert v.error == pytest.approx(100 * (v.value - 0.15) / 0.15)
+    wall = clone_case(TUTORIALS / "solitaryWallRunup", tmp_path / "wall",
+                      {"constant/waveProperties:waves.incident.height": 4.5,
+                       "system/controlDict:functions.gauges.x": [1, 2, 18]})
+    write_gauges(wall)
+    (v,) = evaluate_metrics(wall, {"H": {"type": "waveHeight", "x": 18}}).values()
+    assert v.reference == 4.5
