@@ -426,8 +426,18 @@ def _rows(study: Study) -> list[dict]:
     for r in study.runs:
         f = Path(r.path) / RESULT
         if f.is_file():
-            rows.append(json.loads(f.read_text()))
+            row = json.loads(f.read_text())
+            if row.get("dx") is None:       # set by an override, not the resolutions list
+                row["dx"] = _case_dx(Path(r.path))
+            rows.append(row)
     return rows
+
+
+def _case_dx(path: Path) -> float | None:
+    try:
+        return float(foamdict.read(path / "system" / "particleDict")["dx"])
+    except Exception:                       # no readable particleDict: leave it blank
+        return None
 
 
 def relative_runtimes(rows: list[dict], baseline: str | None) -> None:
@@ -491,14 +501,21 @@ def _fmt(v, key=""):
     return str(v).replace("|", "/")
 
 
+def _finite(v) -> bool:
+    return isinstance(v, (int, float)) and math.isfinite(v)
+
+
 def markdown(rows: list[dict], metric_cols: list[str], study: Study) -> str:
     head = ["run", "description", "dx", "particles", "steps", "wall s", "compile s",
             "particle-steps/s", "runtime vs " + (study.spec.baseline or
                                                  (rows[0]["variant"] if rows else "first"))]
     keys = ["run", "description", "dx", "particles", "steps", "wallSeconds", "compileSeconds",
             "particleStepsPerSecond", "relativeRuntime"]
-    head += metric_cols + ["outcome"]
-    keys += metric_cols + ["outcome"]
+    # a metric column with no value in any run (e.g. errors of a metric without a reference)
+    # stays in the CSV but not in the table
+    shown = [k for k in metric_cols if any(_finite(r.get(k)) for r in rows)]
+    head += shown + ["outcome"]
+    keys += shown + ["outcome"]
     out = [f"# Study {study.source.name}: base case {study.base.name}", "",
            "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
