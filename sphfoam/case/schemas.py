@@ -70,7 +70,7 @@ class StabilityChecks(Strict):
         "escaping"))
     maxEscaped: float = Field(0.05, gt=0, le=1, description=(
         "largest fraction of the fluid particles at the start of the run that may leave the "
-        "domain box"))
+        "domain box (not checked when a tank has an open side other than its top: outflow)"))
     minDeltaT: float = Field(1e-3, gt=0, lt=1, description=(
         "smallest time step, as a fraction of the first step of the run, before the step is "
         "said to have collapsed"))

@@ -250,6 +250,7 @@ class HealthMonitor:
         self.max_ke = float(checks.maxKineticEnergy)
         self.rho0 = float(rho0)
         self.c0 = float(c0)
+        self.outflow = False        # an open tank side: removals are outflow, not escape
         self.snapshot = Snapshot()
         self.dt_ref: float | None = None
         self.n_fluid0 = 0
@@ -258,8 +259,13 @@ class HealthMonitor:
 
     @classmethod
     def from_case(cls, case) -> "HealthMonitor":
-        """The checks of the case's controlDict ``stability`` with its rho0 and c0."""
-        return cls(case.control.stability, case.context.rho0, case.context.c0)
+        """The checks of the case's controlDict ``stability`` with its rho0 and c0. A tank
+        with an open side other than its top has an outflow: particles leaving the domain
+        through it are not counted as escaping (the speed check still applies)."""
+        mon = cls(case.control.stability, case.context.rho0, case.context.c0)
+        mon.outflow = any(set(getattr(w, "open", ["top"])) - {"top"}
+                          for w in case.particles.walls.values())
+        return mon
 
     @property
     def speed_limit(self) -> float:
@@ -322,7 +328,7 @@ class HealthMonitor:
                                    f"{self.max_speed:g} x {self.c0:.4g} m/s: up to "
                                    f"{math.sqrt(s2max):.4g} m/s")
         removed = self._count_removed(sim)
-        if self.n_fluid0 and removed > self.max_escaped * self.n_fluid0:
+        if not self.outflow and self.n_fluid0 and removed > self.max_escaped * self.n_fluid0:
             gone = sim.removals[self._removals0:]      # this run's removals
             ids = np.concatenate([r.ids for r in gone]) if gone else np.zeros(0, np.int64)
             where = np.concatenate([r.where for r in gone]) if gone else np.zeros((0, 2))
