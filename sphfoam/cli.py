@@ -101,23 +101,16 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
 
 
 def _blow_up_text(d, path: Path) -> str:
-    """One screen: what diverged, when, where, which particles, where to look next."""
+    """One screen: the diagnosis's own lines (what, when, where, which particles, the last
+    good time directory), then where to look next."""
     from rich.markup import escape
 
-    lines = [f"what:      {d.title} ({d.kind})", f"           {d.message}",
-             f"when:      step {d.step}, time {d.fail_time:.6g} s "
-             f"(last good time {d.time:.6g} s)"]
-    if d.where is not None:
-        lines.append(f"where:     {d.where}")
-    if d.ids:
-        more = f" (first {len(d.ids)} of {d.count})" if d.count > len(d.ids) else ""
-        lines.append(f"particles: ids {' '.join(map(str, d.ids))}{more}")
+    lines = d.lines()
     if d.last_good:
-        lines.append(f"last good: {path / d.last_good}  (`sphfoam run` restarts from it "
-                     f"with startFrom latestTime)")
+        lines.append(f"`sphfoam run` restarts from {path / d.last_good} (startFrom latestTime)")
     if d.file:
         lines.append(f"diagnosis: {d.file}")
-    lines.append(f"log:       {path / 'log.sphfoam'}")
+    lines.append(f"log: {path / 'log.sphfoam'}")
     return escape("\n".join(lines))
 
 
