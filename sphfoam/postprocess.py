@@ -62,13 +62,14 @@ def sample(case_dir, names: list[str] | None = None, log=print) -> list[Path]:
 
 
 def _wave_of(case: Case, height: float | None, depth: float | None):
-    """(H, d) from the options, a Goring paddle or constant/waveProperties."""
+    """(H, d) from the options, the wave maker or constant/waveProperties."""
     if height and depth:
         return height, depth
     for mot in case.models.motions.values():
         maker = getattr(mot, "maker", None)
-        if maker is not None and maker.name == "goring":
-            return height or maker.coeffs.height, depth or maker.coeffs.depth
+        wave = maker.solitary_wave() if maker is not None else None
+        if wave is not None:
+            return height or wave[0], depth or wave[1]
     for w, _ in case.waves.values():
         region = next(iter(case.particles.fluid.values()))
         return height or w.height, depth or (region.max[1] - region.min[1])

@@ -50,6 +50,8 @@ class Model:
     family: ClassVar[str]
     name: ClassVar[str]
     doc: ClassVar[str]
+    #: former names a case may still write (the registered ``name`` is the one to use)
+    aliases: ClassVar[tuple[str, ...]] = ()
     Coeffs: ClassVar[type[BaseModel]] = Coeffs
 
     def __init__(self, coeffs: BaseModel | None = None):
@@ -60,17 +62,31 @@ class Model:
 
 
 _REGISTRY: dict[str, dict[str, type[Model]]] = {f: {} for f in FAMILIES}
+#: former names still accepted: family -> {old word: registered name}
+_ALIASES: dict[str, dict[str, str]] = {f: {} for f in FAMILIES}
+
+#: the modules that register the built-in models, imported by the registry itself on first use
+MODEL_MODULES = (
+    "sphfoam.models.kernels", "sphfoam.models.eos", "sphfoam.models.equations",
+    "sphfoam.models.viscosity", "sphfoam.models.turbulence", "sphfoam.models.boundaries",
+    "sphfoam.models.filters", "sphfoam.models.corrections", "sphfoam.models.noop",
+    "sphfoam.models.integrators", "sphfoam.models.motion", "sphfoam.models.wavemakers",
+    "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.models.metrics",
+    "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
+)
 
 
 def register(cls: type[Model]) -> type[Model]:
-    """Class decorator adding a model to its family."""
+    """Class decorator adding a model to its family (and its ``aliases``, former names)."""
     if cls.family not in _REGISTRY:
         raise KeyError(f"unknown model family {cls.family!r}")
-    if cls.name in _REGISTRY[cls.family]:
+    if cls.name in _REGISTRY[cls.family] or cls.name in _ALIASES[cls.family]:
         raise KeyError(f"{cls.family} {cls.name!r} registered twice")
     if not getattr(cls, "doc", ""):
         raise ValueError(f"{cls.family} {cls.name!r} needs a one-line doc")
     _REGISTRY[cls.family][cls.name] = cls
+    for old in getattr(cls, "aliases", ()):
+        _ALIASES[cls.family][old] = cls.name
     return cls
 
 
@@ -92,8 +108,19 @@ class UnknownModel(LookupError):
         return msg + f" registered: {', '.join(self.choices) or '(none)'}"
 
 
+_loaded = False
+
+
 def _load_models() -> None:
-    import sphfoam.models  # noqa: F401  (registers every built-in model)
+    """Import the modules of :data:`MODEL_MODULES` (each registers its models)."""
+    global _loaded
+    if _loaded:
+        return
+    import importlib
+
+    for mod in MODEL_MODULES:
+        importlib.import_module(mod)
+    _loaded = True
 
 
 def names(family: str) -> list[str]:
@@ -104,7 +131,7 @@ def names(family: str) -> list[str]:
 def get(family: str, name: str) -> type[Model]:
     _load_models()
     try:
-        return _REGISTRY[family][name]
+        return _REGISTRY[family][_ALIASES[family].get(name, name)]
     except KeyError:
         raise UnknownModel(family, name, list(_REGISTRY[family])) from None
 

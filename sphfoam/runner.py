@@ -22,6 +22,7 @@ from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.case.times import list_times, time_name
 from sphfoam.engine.codegen import Selection, build_pipeline
 from sphfoam.engine.health import BlowUp, Diagnosis, HealthMonitor
+from sphfoam.engine.schedule import Schedule
 from sphfoam.engine.simulation import Simulation
 from sphfoam.case.case import SPH_PROPERTIES
 from sphfoam.engine.state import GHOST, WALL, ParticleState
@@ -73,10 +74,10 @@ def setup_case(case: Case, log=print) -> ParticleState:
     sph = case.models.sph
     eos = sph["equationOfState"]
     state = generate(case.particles, case.context, eos, boundary=sph["boundary"],
-                     support_radius=sph["kernel"].support * case.context.h,
+                     support_radius=case.context.support,
                      moving=bool(case.models.motions),
                      waves=list(case.waves.values()))
-    sim_p = eos.B(case.context) * ((state.rho / case.context.rho0) ** eos.coeffs.gamma - 1.0)
+    sim_p = eos.pressure(state.rho, case.context)
     write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
     log(f"setup: {state.n_fluid} fluid + {state.n - state.n_fluid} wall particles "
         f"(dx = {case.particles.dx:g} m) written to {case.path / '0'}")
@@ -120,31 +121,30 @@ def start_folder(case: Case) -> Path | None:
 
 
 # --- the run -------------------------------------------------------------------------------
-def build_simulation(case: Case, state: ParticleState) -> Simulation:
-    ctx = case.context
-    sph = case.models.sph
-    kernel = sph["kernel"]
+def selection(case: Case) -> Selection:
+    """The models of the case in pipeline order, with its time-step and periodicity
+    switches."""
     domain = case.particles.domain
     periodic = domain.periodic if domain is not None else []
-    sel = Selection(**{f: sph[f] for f in SPH_FAMILIES},
-                    adjust_time_step=case.control.adjustTimeStep,
-                    periodic_x="x" in periodic, periodic_y="y" in periodic)
-    h = ctx.h
+    return Selection(**{f: case.models.sph[f] for f in SPH_FAMILIES},
+                     adjust_time_step=case.control.adjustTimeStep,
+                     periodic_x="x" in periodic, periodic_y="y" in periodic)
+
+
+def build_simulation(case: Case, state: ParticleState) -> Simulation:
+    ctx = case.context
+    sel = selection(case)
     lo, hi = default_domain(case.particles)
-    core = dict(h=h, inv_h=1.0 / h, support2=(kernel.support * h) ** 2, eta2=0.01 * h * h,
-                gx=ctx.g[0], gy=ctx.g[1], lx=hi[0] - lo[0], ly=hi[1] - lo[1])
     check_wall_fields(case, state)
-    pipe = build_pipeline(sel, ctx, core)
+    pipe = build_pipeline(sel, ctx, domain_lo=lo, domain_hi=hi)
     c = case.control
-    filt = sph["densityFilter"]
-    return Simulation(state, pipe, case.models.integrator, h=h, support=kernel.support,
+    return Simulation(state, pipe, case.models.integrator,
                       segments=segments_of(case.particles), motions=case.models.motions,
                       domain_lo=lo, domain_hi=hi, beta=c.maxCo,
                       force_condition=case.schemes.timeStepControl.forceCondition,
                       adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
                       max_delta_t=c.maxDeltaT,
                       cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
-                      filter_every=getattr(filt.coeffs, "every", 0),
                       dt_limit=min(m.dt_limit(ctx) for m in sel.models()))
 
 
@@ -160,7 +160,7 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
     if missing:
         problem = f"the particles lack the field(s) {', '.join(missing)}"
     elif bnd.wall_placement == "none" and walls.any():
-        problem = "the particles include wall particles, which mirrorGhosts does not use"
+        problem = f"the particles include wall particles, which {bnd.name} does not use"
     elif walls.any() and "wallDist" in state.extra:
         d = state.extra["wallDist"][walls]
         if bnd.wall_layers == 1 and d.max() > 0.75 * pd.dx:
@@ -214,20 +214,17 @@ def _run(case, c, log, progress, t_end) -> RunReport:
     start_name = folder.name
     for fo in functions.values():
         fo.start(case, case.context, start_name)
-        fo.execute(sim)
+        if sim.step_index == 0:    # the initial state; a restart samples on its schedule only
+            fo.execute(sim)
 
     report = RunReport(t0, t_end, 0, state.n, sim.pipeline.compile_seconds,
                        sim.pipeline.cache_hit, 0.0)
     monitor = HealthMonitor.from_case(case)
     monitor.start(sim)
     written: list[Path] = []
-    interval = c.writeInterval
-    eps = 1e-9 * max(interval, 1e-300)
-
-    def next_write_time(t):
-        return (math.floor(t / interval + 1e-9) + 1) * interval
-
-    t_write = next_write_time(sim.time) if c.writeControl != "timeStep" else math.inf
+    writes = write_schedule(c)
+    health = Schedule("everyStep")
+    eps = 1e-9 * max(c.writeInterval, 1e-300)
     bar = _Progress(progress, t0, t_end, state.n)
     wall0 = wallclock.perf_counter()
     stop = _StopRequest()
@@ -235,32 +232,27 @@ def _run(case, c, log, progress, t_end) -> RunReport:
         while sim.time < t_end - eps:
             if stop.requested:
                 raise KeyboardInterrupt
-            target = min(t_write, t_end) if c.writeControl == "adjustableRunTime" else t_end
+            lands = c.writeControl == "adjustableRunTime"
+            target = min(writes.next_time(sim.time), t_end) if lands else t_end
             remaining = target - sim.time
+            t_prev = sim.time
             dt = sim.step(remaining)
             landed = dt >= remaining * (1 - 1e-12)
             if landed:
                 sim.time = target          # land exactly, so restarts see the same time
             report.steps += 1
-            diagnosis = monitor.check(sim, dt, landed)
-            if diagnosis is not None:      # nothing of this step is written or sampled
-                report.failure = diagnosis
-                _blow_up(case, sim, monitor, diagnosis, start_name, log)
-                raise BlowUp(diagnosis, report)
-            wrote = False
-            if c.writeControl == "timeStep":
-                wrote = sim.step_index % int(interval) == 0
-            elif sim.time >= t_write - eps or sim.time >= t_end - eps:
-                wrote = True
-            if sim.time >= t_end - eps:
-                wrote = True
+            if health.due(sim.step_index, sim.time, t_prev):
+                diagnosis = monitor.check(sim, dt, landed)
+                if diagnosis is not None:      # nothing of this step is written or sampled
+                    report.failure = diagnosis
+                    _blow_up(case, sim, monitor, diagnosis, start_name, log)
+                    raise BlowUp(diagnosis, report)
+            wrote = writes.due(sim.step_index, sim.time, t_prev) or sim.time >= t_end - eps
             if wrote:
                 written.append(_write(case, sim, log))
                 _purge(written, c.purgeWrite)
-                while t_write <= sim.time + eps:
-                    t_write = next_write_time(t_write)
             for fo in functions.values():
-                if fo.due(sim, wrote):
+                if fo.due(sim, wrote, t_prev):
                     fo.execute(sim)
             bar.update(sim, dt)
     except KeyboardInterrupt:
@@ -281,8 +273,14 @@ def _run(case, c, log, progress, t_end) -> RunReport:
     log(f"end: time {sim.time:.6g} after {report.steps} steps in {report.run_seconds:.2f} s "
         f"({report.particle_steps_per_second:.3g} particle-steps/s); "
         f"removed {report.removed} particle(s)"
-        + (f"; {sim.pushed_back} put back across a mirror wall" if sim.pushed_back else ""))
+        + (f"; {sim.summary()}" if sim.summary() else ""))
     return report
+
+
+def write_schedule(control) -> Schedule:
+    """When time directories are written (controlDict writeControl, writeInterval)."""
+    ctl = "runTime" if control.writeControl == "adjustableRunTime" else control.writeControl
+    return Schedule(ctl, control.writeInterval)
 
 
 def _blow_up(case, sim, monitor: HealthMonitor, diagnosis: Diagnosis, start_name: str,

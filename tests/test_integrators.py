@@ -20,6 +20,7 @@ import shutil
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 from scipy.integrate import solve_ivp
 
 from sphfoam import registry
@@ -45,9 +46,9 @@ def test_registered_with_docs_and_force_evaluations():
         assert cls.family == "integrator" and cls.name == name and cls.__doc__
         assert "\n" not in cls.doc and cls.force_evaluations_per_step == n
     assert integrator({"type": "verlet", "everyN": 7}).coeffs.everyN == 7
-    with pytest.raises(Exception):
+    with pytest.raises(ValidationError, match="everyN"):
         integrator({"type": "verlet", "everyN": 0})
-    with pytest.raises(Exception):
+    with pytest.raises(ValidationError, match="everyN"):
         integrator({"type": "symplectic", "everyN": 3})
 
 
@@ -135,6 +136,12 @@ class FakeSim:
         self.correction = correction
         self.n_rates = 0
         self.du = self.dv = np.zeros(state.n)
+
+    @property
+    def filtered(self):
+        """As ``Simulation.step`` sets it: a density-filter pass ran before this step."""
+        return bool(self.filter_every) and self.step_index > 0 and \
+            self.step_index % self.filter_every == 0
 
     def eos(self):
         pass

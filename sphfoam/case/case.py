@@ -27,7 +27,7 @@ from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
 from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, ParticleDict, SphSchemes,
                                   TransportProperties, WaveProperties)
-from sphfoam.models.base import CaseContext
+from sphfoam.context import CaseContext
 
 FILES = {
     "controlDict": ("system/controlDict", ControlDict),
@@ -199,14 +199,15 @@ class Case:
     def context(self) -> CaseContext:
         pd = self.particles
         kernel = self.models.sph["kernel"]
-        h = kernel.coeffs.hdx * pd.dx
+        h = kernel.h(pd.dx)
         heights = []
         for region in pd.fluid.values():
             ys = [region.min[1], region.max[1]] if region.type == "box" else \
                 [p[1] for p in region.points]
             heights.append(max(ys) - min(ys))
         ctx = CaseContext(dx=pd.dx, h=h, rho0=self.transport.rho0, nu=self.transport.nu,
-                          g=self.gravity, fluid_height=max(heights))
+                          g=self.gravity, fluid_height=max(heights),
+                          support=kernel.support_radius(h))
         c0 = self.models.sph["equationOfState"].c0(ctx)
         return CaseContext(**{**ctx.__dict__, "c0": c0})
 

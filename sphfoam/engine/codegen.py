@@ -22,12 +22,10 @@ from pathlib import Path
 import numpy as np
 
 import sphfoam
+from sphfoam.engine import terms as T
 
 #: the fixed scalar slots every pipeline reads from ``prm`` before the models' own
 CORE_PARAMS = ("h", "inv_h", "support2", "eta2", "gx", "gy")
-#: hooks a model may fill (see sphfoam.models.base)
-HOOKS = ("prepass_init", "prepass_pair", "prepass_final", "particle_code", "pair_code",
-         "continuity_velocity_code", "gradient_code")
 
 
 def cache_root() -> Path:
@@ -52,6 +50,11 @@ def _package_fingerprint() -> str:
 def _block(code: str, indent: int) -> str:
     code = textwrap.dedent(code).strip("\n")
     return textwrap.indent(code, " " * indent) if code else ""
+
+
+def _indent(code: str, n: int = 4) -> str:
+    code = textwrap.dedent(code).strip("\n")
+    return textwrap.indent(code, " " * n) if code else " " * n + "pass"
 
 
 @dataclass
@@ -83,47 +86,23 @@ class Selection:
         per = "".join(a for a, on in (("x", self.periodic_x), ("y", self.periodic_y)) if on)
         return txt + (f", periodic={per}" if per else "")
 
+    def assembly(self) -> "Assembly":
+        return Assembly(self)
+
     def aux_names(self) -> list[str]:
-        names: list[str] = []
-        for m in self.models():
-            for a in getattr(m, "aux", ()):
-                if a in names:
-                    raise ValueError(f"auxiliary field {a!r} declared twice")
-                names.append(a)
-        return names
+        return self.assembly().aux
 
     def field_names(self) -> list[str]:
         """Per-particle persistent fields the generated code reads as ``fld[F_<name>, i]``."""
-        return list(getattr(self.boundary, "wall_fields", ()))
+        return self.assembly().fields
 
-    def snippet(self, hook: str) -> str:
-        return "\n".join(c for c in (getattr(m, hook, "") for m in self.models()) if c)
+    def hooks(self, name: str) -> list:
+        """The selected models' implementations of the run-time hook ``name`` (see
+        ``sphfoam.models.base``), in selection order."""
+        return [getattr(m, name) for m in self.models() if m.implements(name)]
 
 
-_CELLS = """\
-ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)
-iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)
-for cy0 in range({ylo}, {yhi}):
-    cy = {cy}
-    for cx0 in range({xlo}, {xhi}):
-        cx = {cx}
-        cc = cy * ncx + cx
-        for b in range(cell_start[cc], cell_start[cc + 1]):
-            dx_ab = xa - x[b]
-            dy_ab = ya - y[b]
-{wrap}            r2 = dx_ab * dx_ab + dy_ab * dy_ab
-            if r2 >= support2 or r2 == 0.0:   # itself, or a coincident particle (grad W = 0)
-                continue
-            q = math.sqrt(r2) * inv_h
-{body}
-"""
-
-_DEFAULT_GRADIENT = """\
-fw = kern_gw * kernel_dfdq_q(q)
-gWx = fw * dx_ab
-gWy = fw * dy_ab
-"""
-
+#: per-neighbour loads every pair loop makes (engine quantities; see sphfoam.engine.terms)
 _NEIGHBOUR_LOAD = """\
 u_ab = ua - u[b]
 v_ab = va - v[b]
@@ -153,36 +132,241 @@ if s_ab > sigma_a:
     sigma_a = s_ab
 """
 
-_CONTINUITY_VELOCITY = """\
-uc_ab = u_ab
-vc_ab = v_ab
+_CELLS = """\
+ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)
+iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)
+for cy0 in range({ylo}, {yhi}):
+    cy = {cy}
+    for cx0 in range({xlo}, {xhi}):
+        cx = {cx}
+        cc = cy * ncx + cx
+        for b in range(cell_start[cc], cell_start[cc + 1]):
+            dx_ab = xa - x[b]
+            dy_ab = ya - y[b]
+{wrap}            r2 = dx_ab * dx_ab + dy_ab * dy_ab
+            if r2 >= support2 or r2 == 0.0:   # itself, or a coincident particle (grad W = 0)
+                continue
+            q = math.sqrt(r2) * inv_h
+{body}
 """
 
 
-def _pair_loop(sel: Selection, body: str, gradient: str | None = None) -> str:
-    """The 3 x 3 cell gather around particle ``a`` with ``body`` run for each neighbour."""
-    grad = gradient if gradient is not None else _DEFAULT_GRADIENT
-    pre = grad + _NEIGHBOUR_LOAD
-    if "Wab" in body or "Wab" in grad:
-        pre = "Wab = kern_w * kernel_f(q)\n" + pre
-    full = pre + body
+class Assembly:
+    """The selected models' terms, checked, and the code of each loop assembled from them."""
 
-    def axis(per, i, n, name):
-        if per:
-            return f"{i} - 1", f"{i} + 2", f"{name}0 % {n}"
-        return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
+    def __init__(self, sel: Selection):
+        self.sel = sel
+        self.models = sel.models()
+        self.terms = T.order(T.collect(self.models))
+        self.kinds, self.viscous_dry_walls = self._kinds()
+        self.fields = []
+        for m in self.models:
+            for f in m.particle_fields:
+                if f not in self.fields:
+                    self.fields.append(f)
+        T.check(self.terms, set(self.fields), self.kinds)
+        self.aux = []
+        for t in self.terms:
+            for w in t.writes:
+                if w.startswith("aux.") and w[4:] not in self.aux:
+                    self.aux.append(w[4:])
+        seen = [m for m in self.models if m.schedule() is not None]
+        if len(seen) > 1:
+            raise T.ContractError(f"{seen[0].family} {seen[0].name!r} and {seen[1].family} "
+                                  f"{seen[1].name!r} both schedule a filter pass")
 
-    xlo, xhi, cx = axis(sel.periodic_x, "ix", "ncx", "cx")
-    ylo, yhi, cy = axis(sel.periodic_y, "iy", "ncy", "cy")
-    wrap = ""
-    if sel.periodic_x:
-        wrap += ("if dx_ab > half_lx:\n    dx_ab -= lx\nelif dx_ab < -half_lx:\n"
-                 "    dx_ab += lx\n")
-    if sel.periodic_y:
-        wrap += ("if dy_ab > half_ly:\n    dy_ab -= ly\nelif dy_ab < -half_ly:\n"
-                 "    dy_ab += ly\n")
-    return _CELLS.format(xlo=xlo, xhi=xhi, ylo=ylo, yhi=yhi, cx=cx, cy=cy,
-                         wrap=_block(wrap, 12) + ("\n" if wrap else ""), body=_block(full, 12))
+    # --- kinds ---------------------------------------------------------------------------
+    def _kinds(self):
+        kinds: dict[str, str] = {"fluid": "{kind} == FLUID"}
+        owners: dict[str, object] = {}
+        viscous_dry = False
+        for m in self.models:
+            for k, cond in m.neighbour_kinds().items():
+                if k == "noSlipWall":
+                    viscous_dry = bool(cond)
+                    continue
+                if k not in T.NEIGHBOUR_KINDS or k == "fluid":
+                    raise T.ContractError(f"{m.family} {m.name!r} defines the neighbour kind "
+                                          f"{k!r}; definable: ghost, wetWall, dryWall")
+                if k in owners:
+                    o = owners[k]
+                    raise T.ContractError(f"{m.family} {m.name!r} and {o.family} {o.name!r} "
+                                          f"both define the neighbour kind {k!r}")
+                owners[k] = m
+                kinds[k] = cond
+        present = [k for k in T.NEIGHBOUR_KINDS if k in kinds]
+        rest = [k for k in present if kinds[k] == "else"]
+        if rest and rest[0] != present[-1]:
+            raise T.ContractError(f"the neighbour kind {rest[0]!r} is defined as 'every other "
+                                  "particle' but is not the last kind")
+        return {k: kinds[k] for k in present}, viscous_dry
+
+    def _cond(self, k: str, i: str) -> str:
+        kind = "kindb" if i == "b" else f"kind[{i}]"
+        c = self.kinds[k]
+        if c == "else":
+            others = [self._cond(j, i) for j in self.kinds if j != k]
+            c = "not (" + " or ".join(others) + ")" if others else "True"
+            return c
+        return c.format(i=i, kind=kind)
+
+    @property
+    def complete(self) -> bool:
+        """Every neighbour is of some kind (a kind defined as 'every other particle')."""
+        return any(c == "else" for c in self.kinds.values()) or list(self.kinds) == ["fluid"]
+
+    def sees(self, t) -> set[str]:
+        out = set()
+        for s in t.sees:
+            if s == "noSlipWall":
+                if self.viscous_dry_walls and "dryWall" in self.kinds:
+                    out.add("dryWall")
+            elif s == "all" or s in self.kinds:
+                out.add(s)
+        return out
+
+    # --- selection of terms ----------------------------------------------------------------
+    def stage(self, stage: str, applies: str) -> list:
+        """Terms of ``stage`` that run for particles of kind ``applies``."""
+        out = []
+        for t in self.terms:
+            if stage not in t.stages:
+                continue
+            if "all" in t.applies or applies in t.applies:
+                out.append(t)
+            elif applies == "wetWall" and "wall" in t.applies:
+                out.append(t)
+        return out
+
+    def has_stage(self, stage: str) -> bool:
+        return any(stage in t.stages and not t.on_demand for t in self.terms)
+
+    def needed(self, terms: list) -> list:
+        """``terms`` without the on-demand definers nothing in the list reads."""
+        reads = set()
+        for t in terms:
+            if not t.on_demand:
+                reads |= set(t.reads) | set(t.corrects)
+        changed = True
+        while changed:
+            changed = False
+            for t in terms:
+                if t.on_demand and set(t.writes) & reads and not set(t.reads) <= reads:
+                    reads |= set(t.reads)
+                    changed = True
+        return [t for t in terms if not t.on_demand or set(t.writes) & reads]
+
+    # --- code ------------------------------------------------------------------------------
+    def neighbour_body(self, terms: list, sigma: bool = False) -> str:
+        """Pair code of ``terms`` for one neighbour b: the definers and correctors of pair
+        quantities first, for every neighbour, then the others by neighbour kind."""
+        terms = self.needed(terms)
+        pre = [t for t in terms if t.on_demand or t.corrects]
+        rest = [t for t in terms if not (t.on_demand or t.corrects)]
+        pre_code = [expand_components(t.pair) for t in pre if t.pair]
+        code = _NEIGHBOUR_LOAD + "\n".join(x for x in pre_code if x)
+        disp = self._dispatch(rest)
+        if disp:
+            code += "\n" + disp
+        if sigma:
+            code += "\n" + _SIGMA
+        return code
+
+    def _dispatch(self, rest: list) -> str:
+        if not rest:
+            return ""
+        sees = {id(t): self.sees(t) for t in rest}
+        alls = [t for t in rest if "all" in sees[id(t)]]
+        if alls:
+            if len(alls) != len(rest):
+                a, b = alls[0], next(t for t in rest if t not in alls)
+                raise T.ContractError(f"{a.who()} sees every neighbour but {b.who()} in the "
+                                      "same loop sees only some kinds; they cannot share a "
+                                      "loop")
+            return "\n".join(expand_components(t.pair) for t in rest if t.pair)
+        per_kind = {k: [t for t in rest if k in sees[id(t)] and t.pair] for k in self.kinds}
+        groups: list[tuple[list[str], list]] = []
+        for k, ts in per_kind.items():
+            for g in groups:
+                if [id(t) for t in g[1]] == [id(t) for t in ts]:
+                    g[0].append(k)
+                    break
+            else:
+                groups.append(([k], ts))
+        groups = [g for g in groups if g[1]]
+        if not groups:
+            return ""
+        if len(groups) == 1 and set(groups[0][0]) == set(self.kinds) and self.complete:
+            return "\n".join(expand_components(t.pair) for t in groups[0][1])
+        order = list(self.kinds)
+        out = []
+        for gi, (ks, ts) in enumerate(groups):
+            later = [j for g in groups[gi + 1:] for j in g[0]]
+            conds = []
+            for k in ks:
+                c = self._cond(k, "b")
+                excl = [self._cond(j, "b") for j in later if order.index(j) < order.index(k)]
+                if excl:
+                    c = f"({c}) and not ({' or '.join(excl)})"
+                conds.append(c)
+            body = "\n".join(expand_components(t.pair) for t in ts)
+            kw = "if" if gi == 0 else "elif"
+            covered = {j for g in groups for j in g[0]} == set(self.kinds)
+            if gi == len(groups) - 1 and gi > 0 and covered and self.complete:
+                out.append("else:\n" + _indent(body))
+            else:
+                out.append(f"{kw} {' or '.join(conds)}:\n" + _indent(body))
+        return "\n".join(out)
+
+    def pair_loop(self, terms: list, sigma: bool = False) -> str:
+        """The 3 x 3 cell gather around particle ``a`` with ``terms`` for each neighbour."""
+        sel = self.sel
+
+        def axis(per, i, n, name):
+            if per:
+                return f"{i} - 1", f"{i} + 2", f"{name}0 % {n}"
+            return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
+
+        xlo, xhi, cx = axis(sel.periodic_x, "ix", "ncx", "cx")
+        ylo, yhi, cy = axis(sel.periodic_y, "iy", "ncy", "cy")
+        wrap = ""
+        if sel.periodic_x:
+            wrap += ("if dx_ab > half_lx:\n    dx_ab -= lx\nelif dx_ab < -half_lx:\n"
+                     "    dx_ab += lx\n")
+        if sel.periodic_y:
+            wrap += ("if dy_ab > half_ly:\n    dy_ab -= ly\nelif dy_ab < -half_ly:\n"
+                     "    dy_ab += ly\n")
+        return _CELLS.format(xlo=xlo, xhi=xhi, ylo=ylo, yhi=yhi, cx=cx, cy=cy,
+                             wrap=_block(wrap, 12) + ("\n" if wrap else ""),
+                             body=_block(self.neighbour_body(terms, sigma), 12))
+
+    def particle_code(self, terms: list, part: str) -> str:
+        return "\n".join(expand_components(getattr(t, part)) for t in terms
+                         if getattr(t, part))
+
+    def gather(self, terms: list, sigma: bool = False) -> str:
+        """init, the neighbour loop and final of ``terms`` for one particle a."""
+        return "\n".join(x for x in (self.particle_code(terms, "init"),
+                                     self.pair_loop(terms, sigma),
+                                     self.particle_code(terms, "final")) if x)
+
+    def wall_gather(self, stage: str) -> str:
+        """The code of ``stage`` for a wall particle a: terms applying to wet walls, when a
+        is wet ("pass" where no model defines wet walls)."""
+        if "wetWall" not in self.kinds:
+            return "pass"
+        ts = [t for t in self.stage(stage, "wetWall") if t.pair or t.init or t.final]
+        if not [t for t in ts if not t.on_demand]:
+            return "pass"
+        body = self.gather(ts)
+        cond = self._cond("wetWall", "a")
+        if self.kinds["wetWall"] == "else":
+            return body
+        return f"if {cond}:\n" + _indent(body)
+
+
+def expand_components(code: str) -> str:
+    return T.expand_components(code) if code else ""
 
 
 _ARGS = ("x, y, u, v, rho, p, c, m, kind, cell_start, x0, y0, inv_cell, ncx, ncy, prm, aux, "
@@ -190,30 +374,16 @@ _ARGS = ("x, y, u, v, rho, p, c, m, kind, cell_start, x0, y0, inv_cell, ncx, ncy
 
 
 def generate_source(sel: Selection, param_names: list[str]) -> str:
-    """Python source of the pipeline module for ``sel``."""
-    imports = sorted({line for m in sel.models() for line in m.imports()})
+    """Python source of the pipeline module for ``sel``, assembled by stage from the terms
+    the selected models declare (see :mod:`sphfoam.engine.terms`)."""
+    asm = Assembly(sel)
+    imports = sorted({line for m in asm.models for line in m.imports()})
     bind = "\n".join(f"{name} = prm[{i}]" for i, name in enumerate(param_names))
-    aux = sel.aux_names()
+    aux = asm.aux
     aux_const = "\n".join(f"I_{a} = {i}" for i, a in enumerate(aux))
-    fields = sel.field_names()
+    fields = asm.fields
     fld_const = "\n".join(f"F_{a} = {i}" for i, a in enumerate(fields))
-    gradient = next((m.gradient_code for m in sel.models()
-                     if getattr(m, "gradient_code", "")), None)
-    continuity = _CONTINUITY_VELOCITY + sel.snippet("continuity_velocity_code") + "\n" + \
-        sel.continuity.pair_code
-    others = [m.pair_code for m in sel.models()
-              if m is not sel.continuity and getattr(m, "pair_code", "")]
-    bnd = sel.boundary
-    # the boundary model decides which terms a wall neighbour enters (sphfoam.models.boundaries)
-    fluid_body = bnd.fluid_body("\n".join([continuity, *others]), sel.viscosity.pair_code)
-    fluid_body += "\n" + (_SIGMA if sel.adjust_time_step else "")
-    # every term of drho/dt (continuity, and e.g. delta-SPH diffusion) in the density-only pass
-    density_body = bnd.density_body("\n".join([continuity,
-                                               *(c for c in others if "drho_a" in c)]))
-    wall_code = bnd.wall_body(continuity)
-    wall_rates = _pair_loop(sel, wall_code, gradient) if wall_code else "pass"
-    particle_code = sel.snippet("particle_code")
-    has_prepass = any(sel.snippet(k) for k in ("prepass_init", "prepass_pair", "prepass_final"))
+    eos = asm.particle_code(asm.stage("particle", "all"), "final")
 
     parts = [f'''"""sphfoam pipeline, generated for: {sel.describe()}; adjustTimeStep={sel.adjust_time_step}.
 
@@ -227,6 +397,8 @@ from numba import njit, prange
 {chr(10).join(imports)}
 
 FLUID = 0
+WALL = 1
+GHOST = 2
 PARAMS = {tuple(param_names)!r}
 AUX = {tuple(aux)!r}
 {aux_const}
@@ -238,9 +410,10 @@ FIELDS = {tuple(fields)!r}
 def equation_of_state(rho, p, c, prm):
 {_block(bind, 4)}
     for a in prange(rho.shape[0]):
-{_block(sel.equationOfState.eos_code, 8)}
+{_block(eos or "pass", 8)}
 ''']
-    if has_prepass:
+    if asm.has_stage("prepass"):
+        pre = asm.stage("prepass", "all")
         parts.append(f'''
 
 @njit(parallel=True, fastmath=True, cache=True)
@@ -249,10 +422,9 @@ def prepass({_ARGS}):
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
 {_block(_PARTICLE_LOAD, 8)}
-{_block(sel.snippet("prepass_init"), 8)}
-{_block(_pair_loop(sel, sel.snippet("prepass_pair")), 8)}
-{_block(sel.snippet("prepass_final"), 8)}
+{_block(asm.gather(pre), 8)}
 ''')
+    fluid_rates = asm.stage("rates", "fluid")
     parts.append(f'''
 
 @njit(parallel=True, fastmath=True, cache=True)
@@ -266,12 +438,11 @@ def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
         drho_a = 0.0
         sigma_a = 0.0
         if kind[a] == FLUID:
-{_block(particle_code, 12)}
-{_block(_pair_loop(sel, fluid_body, gradient), 12)}
+{_block(asm.gather(fluid_rates, sigma=sel.adjust_time_step), 12)}
             acc_x += gx
             acc_y += gy
         else:
-{_block(wall_rates, 12)}
+{_block(asm.wall_gather("rates"), 12)}
         out_ax[a] = acc_x
         out_ay[a] = acc_y
         out_drho[a] = drho_a
@@ -286,43 +457,56 @@ def density_rate({_ARGS}, out_drho):
 {_block(_PARTICLE_LOAD, 8)}
         drho_a = 0.0
         if kind[a] == FLUID:
-{_block(_pair_loop(sel, density_body, gradient), 12)}
+{_block(asm.gather(asm.stage("density", "fluid")), 12)}
         else:
-{_block(wall_rates, 12)}
+{_block(asm.wall_gather("density"), 12)}
         out_drho[a] = drho_a
 ''')
-    if getattr(bnd, "step_pair", ""):
+    if asm.has_stage("step"):
+        step = asm.stage("step", "wall")
         parts.append(f'''
 
 @njit(parallel=True, fastmath=True, cache=True)
-def boundary_step({_ARGS}):
-    """Once per step, after the re-sort: {bnd.name} wall-particle state."""
+def step_pass({_ARGS}):
+    """Once per step, after the re-sort: per-step state of wall particles."""
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
         if kind[a] != FLUID:
 {_block(_PARTICLE_LOAD, 12)}
-{_block(bnd.step_init, 12)}
-{_block(_pair_loop(sel, bnd.step_pair), 12)}
-{_block(bnd.step_final, 12)}
+{_block(asm.gather(step), 12)}
 ''')
-    filt = sel.densityFilter
-    if filt is not None and getattr(filt, "filter_pair", ""):
+    if asm.has_stage("filter"):
+        filt = asm.stage("filter", "fluid")
+        owner = next(t.owner for t in filt if not t.on_demand)
         parts.append(f'''
 
 @njit(parallel=True, fastmath=True, cache=True)
 def density_filter({_ARGS}, out_rho):
-    """{filt.doc}"""
+    """{owner.doc}"""
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
 {_block(_PARTICLE_LOAD, 8)}
         rho_new = rhoa
         if kind[a] == FLUID:
-{_block(filt.filter_init, 12)}
-{_block(_pair_loop(sel, filt.filter_pair), 12)}
-{_block(filt.filter_final, 12)}
+{_block(asm.gather(filt), 12)}
         out_rho[a] = rho_new
 ''')
     return "".join(parts)
+
+
+def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> dict:
+    """h, 1/h, the squared support radius, the eta^2 guard of T(3.32), gravity and, for periodic
+    axes, the periods: the single source of these for the pipeline, set-up, sampling and
+    benchmarks (all from the selected kernel and the case context)."""
+    h = ctx.h
+    support = sel.kernel.support * h
+    core = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=0.01 * h * h,
+                gx=ctx.g[0], gy=ctx.g[1])
+    if sel.periodic_x:
+        core["lx"] = float(domain_hi[0] - domain_lo[0])
+    if sel.periodic_y:
+        core["ly"] = float(domain_hi[1] - domain_lo[1])
+    return core
 
 
 @dataclass
@@ -335,6 +519,16 @@ class Pipeline:
     compile_seconds: float
     cache_hit: bool
     selection: Selection
+    #: h, support radius (m) and the rest of :func:`core_parameters`
+    core: dict | None = None
+
+    @property
+    def h(self) -> float:
+        return float(self.prm[CORE_PARAMS.index("h")])
+
+    @property
+    def support_radius(self) -> float:
+        return float(np.sqrt(self.prm[CORE_PARAMS.index("support2")]))
 
     @property
     def equation_of_state(self):
@@ -358,9 +552,9 @@ class Pipeline:
         return getattr(self.module, "density_filter", None)
 
     @property
-    def boundary_step(self):
-        """None unless the boundary keeps a per-step wall state (e.g. hybrid wet/dry)."""
-        return getattr(self.module, "boundary_step", None)
+    def step_pass(self):
+        """None unless a selected model keeps a per-step state (the ``step`` stage)."""
+        return getattr(self.module, "step_pass", None)
 
     @property
     def fields(self) -> tuple[str, ...]:
@@ -370,13 +564,25 @@ class Pipeline:
     def n_aux(self) -> int:
         return len(self.module.AUX)
 
+    def aux_index(self, name: str) -> int:
+        return list(self.module.AUX).index(name)
 
-def build_pipeline(sel: Selection, ctx, core: dict[str, float]) -> Pipeline:
+
+def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
+                   domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> Pipeline:
     """Generate (or reuse) the module for ``sel``, import it and compile it.
 
-    ``core`` holds h, inv_h, support2, eta2, gx, gy and, for periodic axes, lx/half_lx and
-    ly/half_ly (see :data:`CORE_PARAMS`).
+    ``core`` (h, inv_h, support2, eta2, gx, gy and, for periodic axes, lx and ly) defaults to
+    :func:`core_parameters` of ``sel`` and ``ctx``; given, it must agree with them.
     """
+    derived = core_parameters(sel, ctx, domain_lo, domain_hi)
+    if core is None:
+        core = derived
+    else:
+        for k in CORE_PARAMS:
+            if not np.isclose(float(core[k]), derived[k], rtol=1e-12, atol=0.0):
+                raise ValueError(f"core parameter {k} = {core[k]!r} differs from the one the "
+                                 f"selection and case context give ({derived[k]!r})")
     params: dict[str, float] = {k: float(core[k]) for k in CORE_PARAMS}
     for axis, on in (("x", sel.periodic_x), ("y", sel.periodic_y)):
         if on:
@@ -410,7 +616,7 @@ def build_pipeline(sel: Selection, ctx, core: dict[str, float]) -> Pipeline:
     funcs = _warm_up(module, prm)
     seconds = time.perf_counter() - t0
     hits = sum(len(f.stats.cache_hits) for f in funcs)
-    return Pipeline(module, prm, path, seconds, hits > 0, sel)
+    return Pipeline(module, prm, path, seconds, hits > 0, sel, dict(core))
 
 
 def _warm_up(module, prm):
@@ -435,7 +641,7 @@ def _warm_up(module, prm):
     if hasattr(module, "density_filter"):
         module.density_filter(*args, f.copy())
         funcs.append(module.density_filter)
-    if hasattr(module, "boundary_step"):
-        module.boundary_step(*args)
-        funcs.append(module.boundary_step)
+    if hasattr(module, "step_pass"):
+        module.step_pass(*args)
+        funcs.append(module.step_pass)
     return funcs

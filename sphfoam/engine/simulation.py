@@ -11,19 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, prange
 
-from sphfoam.engine import ghosts as gh
 from sphfoam.engine.neighbours import CellList, permute
-from sphfoam.engine.state import FLUID, GHOST, ParticleState
+from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.timestep import stable_time_step
-
-
-@njit(parallel=True, cache=True, fastmath=True)
-def add_correction(u, du, kind):
-    """u + du for fluid particles (walls keep their prescribed velocity)."""
-    out = np.empty_like(u)
-    for a in prange(u.shape[0]):
-        out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
-    return out
 
 
 @njit(parallel=True, cache=True)
@@ -48,16 +38,30 @@ class Removal:
 
 
 class Simulation:
-    def __init__(self, state: ParticleState, pipeline, integrator, *, h: float, support: float,
-                 domain_lo, domain_hi, beta: float, force_condition: bool,
-                 adjust_time_step: bool, delta_t: float, max_delta_t: float = math.inf,
-                 cell_size_factor: float = 1.05, filter_every: int = 0,
-                 dt_limit: float = math.inf, segments=(), motions=None):
+    """The particle state stepped by the compiled pipeline of a selection.
+
+    Everything model-specific reaches the simulation through the selected models' run-time
+    hooks (``sphfoam.models.base``): the simulation itself names no model.
+    """
+
+    def __init__(self, state: ParticleState, pipeline, integrator, *, domain_lo, domain_hi,
+                 beta: float, force_condition: bool, adjust_time_step: bool, delta_t: float,
+                 max_delta_t: float = math.inf, cell_size_factor: float = 1.05,
+                 dt_limit: float = math.inf, segments=(), motions=None,
+                 h: float | None = None, support: float | None = None,
+                 filter_every: int | None = None):
         self.state = state
         self.pipeline = pipeline
         self.prm = pipeline.prm
         self.integrator = integrator
-        self.h = float(h)
+        #: the smoothing length and support radius are the pipeline's (one source of truth);
+        #: ``h`` and ``support`` (in units of h), when given, must agree with them
+        self.h = pipeline.h
+        reach = pipeline.support_radius
+        if h is not None and abs(h - self.h) > 1e-12 * self.h:
+            raise ValueError("h does not match the pipeline's")
+        if support is not None and abs(support * self.h - reach) > 1e-9 * reach:
+            raise ValueError("kernel support does not match the pipeline's")
         self.beta = float(beta)
         self.force_condition = bool(force_condition)
         self.adjust_time_step = bool(adjust_time_step)
@@ -67,11 +71,17 @@ class Simulation:
         if cell_size_factor < 1.0:
             raise ValueError("cellSizeFactor must be >= 1 (cells smaller than the support miss "
                              "neighbours)")
-        if abs(support ** 2 * h ** 2 - self.prm[2]) > 1e-9 * self.prm[2]:
-            raise ValueError("kernel support does not match the pipeline's")
-        self.cells = CellList(domain_lo, domain_hi, support * h * cell_size_factor,
+        self.cells = CellList(domain_lo, domain_hi, reach * cell_size_factor,
                               sel.periodic_x, sel.periodic_y)
-        self.filter_every = int(filter_every) if pipeline.density_filter is not None else 0
+        #: when the density filter's pass runs (the filter model's schedule), None: never
+        schedules = [m.schedule() for m in sel.models() if m.schedule() is not None]
+        self.filter_schedule = schedules[0] if pipeline.density_filter is not None and \
+            schedules else None
+        if filter_every is not None and filter_every != self.filter_every:
+            raise ValueError(f"filter_every {filter_every} differs from the filter's schedule "
+                             f"({self.filter_every})")
+        #: whether the density filter ran before the step in progress (integrators read it)
+        self.filtered = False
         self.model_dt_limit = float(dt_limit)
         self.time = 0.0
         self.step_index = 0
@@ -80,26 +90,37 @@ class Simulation:
         self.aux = np.zeros((pipeline.n_aux, state.n))
         self.on_removal = None
         self._fld = None
-        #: fluid particles put back across a mirror wall they had crossed (see ghosts.push_back)
-        self.pushed_back = 0
         #: prescribed motions by wall-entry index (sphfoam.models.motion)
         self.motions = dict(motions or {})
         self.segments = list(segments)
-        bnd = sel.boundary
-        self.mirror = bool(getattr(bnd, "ghosts", False))
-        if self.mirror:
-            if not self.segments:
-                raise ValueError("mirrorGhosts needs walls in system/particleDict")
-            self.no_slip = bool(bnd.coeffs.noSlip)
-            self.reach = support * h
-            self.seg = gh.segment_array(self.segments)
-            self.corners = gh.corner_pairs(self.segments, 1e-9 * max(1.0, self.reach))
-            self._ghost = None
+        self._hooks = {name: sel.hooks(name) for name in
+                       ("before_neighbours", "add_particles", "after_sort",
+                        "before_evaluation", "walls_moved", "after_step")}
+        adv = sel.hooks("advection_velocity")
+        if len(adv) > 1:
+            raise ValueError("two selected models set the advection velocity")
+        self._advection = adv[0] if adv else None
+        self._summaries = sel.hooks("summary")
+        for attach in sel.hooks("attach"):
+            attach(self)
+
+    @property
+    def filter_every(self) -> int:
+        """Steps between density-filter passes (0: none)."""
+        return int(self.filter_schedule.interval) if self.filter_schedule else 0
+
+    def _run_hooks(self, name, *args):
+        for hook in self._hooks[name]:
+            hook(self, *args)
+
+    def summary(self) -> str:
+        """What the selected models report at the end of a run ("" for nothing)."""
+        return "; ".join(x for x in (f() for f in self._summaries) if x)
 
     # --- walls ---------------------------------------------------------------------------
     def move_walls(self, t: float):
-        """Put every wall with a prescribed motion where it is at time ``t`` (particles and,
-        for mirrored ghosts, segments). The integrators call this at each stage time."""
+        """Put every wall with a prescribed motion where it is at time ``t`` (particles and
+        the models that follow walls). The integrators call this at each stage time."""
         if not self.motions:
             return
         st = self.state
@@ -110,47 +131,16 @@ class Simulation:
             if "patch" in st.extra:
                 prescribe_patch(st.x, st.y, st.u, st.v, st.extra["patch"], st.extra["x0"],
                                 st.extra["y0"], float(which), ox, oy, uu, vv)
-        if self.mirror:
-            self.seg = gh.segment_array(self.segments, offs, vels)
-        self._sync_ghosts()
-
-    def _make_ghosts(self):
-        """Mirror every fluid particle near a wall across it (T(3.77)); returns the cells of
-        the new ghosts (those outside the cell grid are dropped)."""
-        st = self.state
-        count = np.zeros(st.n, dtype=np.int64)
-        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
-        offset = np.zeros(st.n, dtype=np.int64)
-        np.cumsum(count[:-1], out=offset[1:])
-        ng = int(count.sum())
-        src = np.empty(ng, dtype=np.int64)
-        s1 = np.empty(ng, dtype=np.int64)
-        s2 = np.empty(ng, dtype=np.int64)
-        gh.fill_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, offset, src,
-                       s1, s2)
-        n0 = st.n
-        st.append(np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng),
-                  np.zeros(ng), np.full(ng, GHOST), -1 - st.id[src])
-        gidx = np.arange(n0, n0 + ng)
-        gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2, self.seg,
-                          self.no_slip)
-        self._ghost = (gidx, src, s1, s2)
-
-    def _sync_ghosts(self):
-        if self.mirror and self._ghost is not None:
-            st = self.state
-            gidx, src, s1, s2 = self._ghost
-            gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
-                              self.seg, self.no_slip)
+        self._run_hooks("walls_moved", offs, vels)
+        self._run_hooks("before_evaluation")
 
     # --- stages --------------------------------------------------------------------------
     def neighbour_update(self):
-        """Bin into cells, drop particles that left the domain, (re)make mirrored ghosts,
-        sort by cell."""
+        """Bin into cells, drop particles that left the domain, let models add particles
+        (e.g. mirror ghosts), sort by cell."""
         st = self.state
         self._fld = None
-        if self.mirror and (st.kind == GHOST).any():
-            st.keep(st.kind != GHOST)
+        self._run_hooks("before_neighbours")
         cell, outside = self.cells.bin(st.x, st.y)
         if outside:
             gone = cell < 0
@@ -161,25 +151,11 @@ class Simulation:
                 self.on_removal(rem)
             st.keep(~gone)
             cell = cell[~gone]
-        if self.mirror:
-            n0 = st.n
-            self._make_ghosts()
-            gcell, gout = self.cells.bin(st.x[n0:], st.y[n0:])
-            cell = np.concatenate([cell, gcell])
-            if gout:      # a ghost beyond the grid: drop it (its particle is at the edge)
-                keep = cell >= 0
-                st.keep(keep)
-                cell = cell[keep]
-                gidx, src, s1, s2 = self._ghost
-                kg = keep[n0:]
-                self._ghost = (np.arange(n0, n0 + int(kg.sum())), src[kg], s1[kg], s2[kg])
+        for add in self._hooks["add_particles"]:
+            cell = np.concatenate([cell, add(self, cell)])
         order = self.cells.sort(cell)
         st.apply(order, permute)
-        if self.mirror:
-            inv = np.empty_like(order)
-            inv[order] = np.arange(order.size)
-            gidx, src, s1, s2 = self._ghost
-            self._ghost = (inv[gidx], inv[src], s1, s2)
+        self._run_hooks("after_sort", order)
 
     def _grid_args(self):
         st, cl = self.state, self.cells
@@ -197,15 +173,11 @@ class Simulation:
             self.pipeline.prepass(*args)
 
     def position_velocity(self, u, v):
-        """The velocity positions are advanced with: (u, v) itself, or with a velocity
-        correction selected (XSPH, T(3.62)), u + du and v + dv from the last pre-pass."""
-        vc = self.pipeline.selection.velocityCorrection
-        if vc is None or not getattr(vc, "advects_positions", False):
+        """The velocity positions are advanced with: (u, v) itself, or what the selected
+        model that sets the advection velocity makes of it (e.g. XSPH, T(3.62))."""
+        if self._advection is None:
             return u, v
-        aux_names = self.pipeline.module.AUX
-        du = self.aux[aux_names.index(vc.aux[0])]
-        dv = self.aux[aux_names.index(vc.aux[1])]
-        return add_correction(u, du, self.state.kind), add_correction(v, dv, self.state.kind)
+        return self._advection(self, u, v)
 
     def filter_density(self):
         """Run the density filter's pass (T(3.64)-(3.69)); the caller decides when."""
@@ -219,23 +191,23 @@ class Simulation:
 
     def eos(self):
         st = self.state
-        self._sync_ghosts()
+        self._run_hooks("before_evaluation")
         self.pipeline.equation_of_state(st.rho, st.p, st.c, self.prm)
 
-    def boundary_step(self):
-        """The boundary's once-per-step wall update (e.g. hybrid wet/dry), if it has one."""
-        if self.pipeline.boundary_step is not None:
-            self.pipeline.boundary_step(*self._grid_args())
+    def step_pass(self):
+        """The once-per-step pass of the selected models (a per-step wall state), if any."""
+        if self.pipeline.step_pass is not None:
+            self.pipeline.step_pass(*self._grid_args())
 
     def rates(self):
         st = self.state
-        self._sync_ghosts()
+        self._run_hooks("before_evaluation")
         args = self._grid_args()
         self._prepass(args)
         self.pipeline.rates(*args, st.ax, st.ay, st.drho, st.sigma)
 
     def density_rate(self):
-        self._sync_ghosts()
+        self._run_hooks("before_evaluation")
         args = self._grid_args()
         self._prepass(args)
         self.pipeline.density_rate(*args, self.state.drho)
@@ -253,18 +225,15 @@ class Simulation:
         """Re-sort, filter the density when due, then one step of the integrator."""
         self.move_walls(self.time)
         self.neighbour_update()
-        self.boundary_step()
-        if self.filter_every and self.step_index > 0 and self.step_index % self.filter_every == 0:
+        self.step_pass()
+        self.filtered = bool(self.filter_schedule and
+                             self.filter_schedule.due_before_step(self.step_index))
+        if self.filtered:
             self.filter_density()
         dt = self.integrator.step(self, dt_remaining)
         self.time += dt
         self.step_index += 1
-        if self.mirror:
-            # a particle that crossed a mirror wall during the step goes back before anything
-            # (a write, a function object, the next step) sees it
-            st = self.state
-            self.pushed_back += gh.push_back(st.x, st.y, st.u, st.v, st.kind, self.seg,
-                                             self.reach)
+        self._run_hooks("after_step")
         return dt
 
     def pressure(self) -> np.ndarray:

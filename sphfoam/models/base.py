@@ -1,76 +1,76 @@
-"""What a model contributes to the generated pipeline.
+"""What a model contributes to the generated pipeline, and the hooks it may implement.
 
-The pipeline (``sphfoam.engine.codegen``) is Python source written for exactly the models a
-case selects.  A model contributes *snippets* — a few lines of numba-compatible Python — at
-named hooks, plus the imports those lines need and the scalar coefficients they read.
+A :class:`PipelineModel` declares
 
-Names a snippet may read inside the pair loop of particle ``a`` with neighbour ``b``::
+* :meth:`~PipelineModel.terms`: named :class:`~sphfoam.engine.terms.Term` objects, each with
+  its stages, the particle and neighbour kinds it concerns, its code and the quantities and
+  fields it reads and writes (the contract: see :mod:`sphfoam.engine.terms`);
+* :meth:`~PipelineModel.params`: the scalar coefficients its code reads, each named with the
+  model's ``prefix`` (bound as ``name = prm[i]`` in every generated function);
+* :meth:`~PipelineModel.imports`: the import lines its code needs;
+* ``particle_fields``: per-particle fields the set-up must write (read as ``fld[F_<name>, i]``);
+* :meth:`~PipelineModel.neighbour_kinds`: for a boundary, which neighbours are ghosts, wet
+  walls and dry walls (conditions on particle ``{i}`` of kind ``{kind}``);
+* :meth:`~PipelineModel.schedule`: when its ``filter`` stage runs (a density filter);
+* :meth:`~PipelineModel.dt_limit`: a cap on the time step (e.g. viscous diffusion).
+
+Names the code of a term may read inside the pair loop of particle ``a`` with neighbour ``b``::
 
     a, b                  particle indices
     xa, ya, ua, va        position and velocity of a
     rhoa, pa, ca, rhob, pb, cb, mb, kindb
     dx_ab, dy_ab, r2, q              r_ab = r_a - r_b, |r_ab|^2, q = |r_ab| / h (r2 > 0)
     u_ab, v_ab, vdotr                v_ab = v_a - v_b and v_ab . r_ab
-    gWx, gWy                         grad_a W_ab
-    h, inv_h, eta2                   smoothing length, 1/h, (0.1 h)^2 guard of T(3.32), T(3.38)
+    h, inv_h, eta2, gx, gy           smoothing length, 1/h, (0.1 h)^2 guard of T(3.32), gravity
 
-and accumulate into ``acc_x, acc_y`` (dv_a/dt), ``drho_a`` (drho_a/dt), ``sigma_a`` (T(3.89)).
-``Wab`` (the kernel value) is computed in a loop only when a snippet of that loop uses it.
-Every coefficient a model needs is declared in :meth:`params` with a name that starts with the
-model's prefix; the generated code binds ``name = prm[i]`` once per call.
+and, declared in ``reads``: ``Wab`` (``W``), ``gWx, gWy`` (``gradW``), ``uc_ab, vc_ab``
+(``uc``), ``aux[I_<name>, i]`` (``aux.<name>``) and ``fld[F_<name>, i]`` (``field.<name>``).
+Rates terms accumulate into ``acc_x, acc_y`` (``acc``) and ``drho_a`` (``drho``).
 
-Hooks (class attributes holding source text; empty means "nothing"):
+Run-time hooks (Python, called by :class:`sphfoam.engine.simulation.Simulation` for every
+selected model that implements them; the engine names no model):
 
-``aux``                       names of per-particle fields the model computes in the pre-pass;
-                              stored in ``aux[I_<name>, a]`` and readable for a and b later
-``prepass_init``              per particle a, before its pre-pass neighbour loop
-``prepass_pair``              per neighbour b in the pre-pass (plain kernel gradient)
-``prepass_final``             per particle a after the loop: store ``aux[I_<name>, a] = ...``
-``particle_code``             per fluid particle a, before its rates loop
-``pair_code``                 per neighbour b of a fluid particle in the rates loop
-``continuity_velocity_code``  redefines ``uc_ab, vc_ab``, the velocity difference continuity
-                              uses (``u_ab, v_ab`` by default; XSPH corrects it)
-``gradient_code``             replaces the kernel gradient ``gWx, gWy`` in the rates and
-                              density loops (kernel corrections); may read ``aux`` of a
-``filter_init/pair/final``    (densityFilter) a separate pass run every N steps that sets
-                              ``rho_new`` for each fluid particle a
-``eos_code``                  (equationOfState) sets ``p[a]`` and ``c[a]`` from ``rho[a]``
-
-:meth:`dt_limit` lets a model cap the time step (e.g. viscous diffusion).
+``attach(sim)``                    once, when the simulation is built
+``before_neighbours(sim)``         at the start of each neighbour update (before binning)
+``add_particles(sim, cell)``       after binning; may append particles (e.g. mirror ghosts)
+                                   and returns the cell index of the appended ones
+``after_sort(sim, order)``         after the particles were re-sorted by ``order``
+``before_evaluation(sim)``         before every evaluation of the pipeline (e.g. refresh ghosts)
+``walls_moved(sim, offsets, velocities)``  prescribed wall motion at a stage time
+``after_step(sim)``                at the end of each step, before anything sees the state
+``advection_velocity(sim, u, v)``  the velocity positions move with (e.g. XSPH); at most one
+``summary()``                      a line for the end of the run's log ("" for none)
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+from sphfoam.context import CaseContext
+from sphfoam.engine.terms import Term
 from sphfoam.registry import Model
 
+__all__ = ["CaseContext", "PipelineModel", "Term", "HOOK_NAMES"]
 
-@dataclass(frozen=True)
-class CaseContext:
-    """Case-level quantities models derive their coefficients from."""
-
-    dx: float          # initial particle spacing (system/particleDict)
-    h: float           # smoothing length
-    rho0: float        # reference density (constant/transportProperties)
-    nu: float          # kinematic viscosity
-    g: tuple[float, float]
-    fluid_height: float  # height of the tallest fluid block, for v_max estimates
-    c0: float = 0.0    # reference speed of sound (set once the equation of state is known)
+#: the run-time hooks above
+HOOK_NAMES = ("attach", "before_neighbours", "add_particles", "after_sort", "before_evaluation",
+              "walls_moved", "after_step", "advection_velocity", "summary")
 
 
 class PipelineModel(Model):
-    """A model that writes code into the generated pipeline (see the hooks above)."""
+    """A model that contributes terms to the generated pipeline (see the module docstring)."""
 
     prefix: str = ""
-    aux: tuple[str, ...] = ()
-    prepass_init: str = ""
-    prepass_pair: str = ""
-    prepass_final: str = ""
-    particle_code: str = ""
-    pair_code: str = ""
-    continuity_velocity_code: str = ""
-    gradient_code: str = ""
+    #: per-particle fields the set-up writes and the code reads as ``fld[F_<name>, i]``
+    particle_fields: tuple[str, ...] = ()
+
+    def terms(self) -> list[Term]:
+        return []
+
+    def neighbour_kinds(self) -> dict[str, str]:
+        return {}
+
+    def schedule(self):
+        """A :class:`~sphfoam.engine.schedule.Schedule` for the ``filter`` stage, or None."""
+        return None
 
     def dt_limit(self, ctx: CaseContext) -> float:
         """Largest stable time step this model allows (inf: no limit of its own)."""
@@ -82,6 +82,6 @@ class PipelineModel(Model):
     def params(self, ctx: CaseContext) -> dict[str, float]:
         return {}
 
-    def selection_key(self) -> str:
-        """What, besides the model's name, changes the generated source (none by default)."""
-        return ""
+    def implements(self, hook: str) -> bool:
+        """Whether this model implements the run-time hook ``hook``."""
+        return hook in HOOK_NAMES and callable(getattr(self, hook, None))

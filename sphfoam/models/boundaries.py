@@ -24,8 +24,12 @@ of a point rather than of a wall); its neighbours along either wall act with the
 
 from __future__ import annotations
 
+import numpy as np
 from pydantic import Field
 
+from sphfoam.engine.state import GHOST
+from sphfoam.engine.terms import Term
+from sphfoam.models import mirror as gh
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
@@ -41,28 +45,10 @@ class Boundary(PipelineModel):
     #: per-particle fields (set-up writes them for wall particles) the generated code reads
     #: as ``fld[F_<name>, b]``
     wall_fields: tuple[str, ...] = ()
-    #: True when wall particles take part in the continuity equation (their density evolves)
-    wall_density_evolves: bool = False
-    #: True when the engine mirrors fluid particles across the wall segments every step
-    ghosts: bool = False
-    #: a once-per-step pass over the particles (after the neighbour re-sort), in the generated
-    #: ``boundary_step``: per particle a, its neighbour loop, and after the loop
-    step_init: str = ""
-    step_pair: str = ""
-    step_final: str = ""
 
-    def fluid_body(self, full: str, viscous: str) -> str:
-        """Pair code for a fluid particle ``a`` and any neighbour ``b``; ``full`` holds every
-        selected term (continuity, momentum, viscosity, ...), ``viscous`` the viscosity alone."""
-        return full
-
-    def density_body(self, continuity: str) -> str:
-        """Pair code of the density-only pass for a fluid particle ``a``."""
-        return continuity
-
-    def wall_body(self, continuity: str) -> str:
-        """Pair code of a wall particle ``a`` in the rates and density passes ("" = none)."""
-        return continuity if self.wall_density_evolves else ""
+    @property
+    def particle_fields(self) -> tuple[str, ...]:
+        return self.wall_fields
 
 
 @register
@@ -77,7 +63,11 @@ class StationaryGhosts(Boundary):
 
     name = "stationaryGhosts"
     doc = "fixed wall-particle rows whose density evolves by pairing with fluid, T §3.8"
-    wall_density_evolves = True
+
+    def neighbour_kinds(self):
+        """Every wall particle is wet: it enters every term as a fluid particle would, and
+        its density evolves by the continuity equation."""
+        return {"wetWall": "else"}
 
 
 class _NoSlip(Coeffs):
@@ -138,6 +128,10 @@ if chi > 0.0 and yn < 2.0 * h:
 """
 
 
+#: the wall fields the repulsive forces read
+_GEOMETRY_READS = ("field.nx", "field.ny", "field.corner")
+
+
 class _Repulsive(Boundary):
     wall_layers = 1
     wall_fields = ("nx", "ny", "corner", "wallDist")
@@ -146,19 +140,13 @@ class _Repulsive(Boundary):
     class Coeffs(_NoSlip):
         pass
 
-    def fluid_body(self, full: str, viscous: str) -> str:
-        wall = (viscous + "\n" if self.coeffs.noSlip else "") + self.force_code
-        return ("if kindb == FLUID:\n" + _indent(full) + "\nelse:\n" + _indent(wall))
+    def neighbour_kinds(self):
+        """Every wall particle is dry: it pushes (``force_code``) and, no-slip, rubs."""
+        return {"dryWall": "else", "noSlipWall": self.coeffs.noSlip}
 
-    def density_body(self, continuity: str) -> str:
-        return "if kindb == FLUID:\n" + _indent(continuity)
-
-    def wall_body(self, continuity: str) -> str:
-        return ""
-
-
-def _indent(code: str) -> str:
-    return "\n".join("    " + ln for ln in code.strip("\n").splitlines()) or "    pass"
+    def terms(self):
+        return [Term("wallForce", ("rates",), pair=self.force_code, sees=("dryWall",),
+                     reads=_GEOMETRY_READS, writes=("acc",))]
 
 
 @register
@@ -226,11 +214,87 @@ class MirrorGhosts(Boundary):
     name = "mirrorGhosts"
     doc = "fluid mirrored across straight walls each step, T(3.77)-(3.80); free- or no-slip"
     wall_placement = "none"
-    ghosts = True
 
     class Coeffs(Coeffs):
         noSlip: bool = Field(False, description="reflect the tangential velocity too "
                              "(no-slip); no: T(3.79), free slip as in P section 4")
+
+    def neighbour_kinds(self):
+        """Ghosts are every non-fluid neighbour; they enter every term as fluid."""
+        return {"ghost": "else"}
+
+    # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
+    def attach(self, sim):
+        if not sim.segments:
+            raise ValueError("mirrorGhosts needs walls in system/particleDict")
+        self.reach = sim.pipeline.support_radius
+        self.seg = gh.segment_array(sim.segments)
+        self.corners = gh.corner_pairs(sim.segments, 1e-9 * max(1.0, self.reach))
+        self._ghost = None
+        self.pushed_back = 0
+
+    def before_neighbours(self, sim):
+        st = sim.state
+        if (st.kind == GHOST).any():
+            st.keep(st.kind != GHOST)
+        self._ghost = None
+
+    def add_particles(self, sim, cell):
+        """Mirror every fluid particle near a wall across it (T(3.77)); ghosts that fall
+        outside the cell grid are dropped (their particle is at the edge)."""
+        st = sim.state
+        count = np.zeros(st.n, dtype=np.int64)
+        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
+        offset = np.zeros(st.n, dtype=np.int64)
+        np.cumsum(count[:-1], out=offset[1:])
+        ng = int(count.sum())
+        src = np.empty(ng, dtype=np.int64)
+        s1 = np.empty(ng, dtype=np.int64)
+        s2 = np.empty(ng, dtype=np.int64)
+        gh.fill_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, offset, src,
+                       s1, s2)
+        n0 = st.n
+        st.append(np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng),
+                  np.zeros(ng), np.full(ng, GHOST), -1 - st.id[src])
+        gidx = np.arange(n0, n0 + ng)
+        gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2, self.seg,
+                          self.coeffs.noSlip)
+        gcell, gout = sim.cells.bin(st.x[n0:], st.y[n0:])
+        if gout:
+            keep = np.concatenate([np.ones(n0, dtype=bool), gcell >= 0])
+            st.keep(keep)
+            kg = gcell >= 0
+            gcell = gcell[kg]
+            gidx, src, s1, s2 = np.arange(n0, n0 + int(kg.sum())), src[kg], s1[kg], s2[kg]
+        self._ghost = (gidx, src, s1, s2)
+        return gcell
+
+    def after_sort(self, sim, order):
+        inv = np.empty_like(order)
+        inv[order] = np.arange(order.size)
+        gidx, src, s1, s2 = self._ghost
+        self._ghost = (inv[gidx], inv[src], s1, s2)
+
+    def before_evaluation(self, sim):
+        if self._ghost is not None:
+            st = sim.state
+            gidx, src, s1, s2 = self._ghost
+            gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
+                              self.seg, self.coeffs.noSlip)
+
+    def walls_moved(self, sim, offsets, velocities):
+        self.seg = gh.segment_array(sim.segments, offsets, velocities)
+
+    def after_step(self, sim):
+        """A particle that crossed a mirror wall during the step goes back before anything
+        (a write, a function object, the next step) sees it."""
+        st = sim.state
+        self.pushed_back += gh.push_back(st.x, st.y, st.u, st.v, st.kind, self.seg,
+                                         self.reach)
+
+    def summary(self) -> str:
+        n = getattr(self, "pushed_back", 0)
+        return f"{n} put back across a mirror wall" if n else ""
 
 
 @register
@@ -258,7 +322,6 @@ class Hybrid(Boundary):
     doc = ("hybrid wet/dry boundary, T §3.9: stationary ghosts once a wall particle has its "
            "required fluid pairs, Monaghan-Kos force within dx while dry")
     wall_fields = ("nx", "ny", "corner", "wallDist", "nFull")
-    aux = ("bnd_wet",)
 
     class Coeffs(_NoSlip):
         wetFraction: float = Field(0.75, gt=0.0, le=1.0, description=(
@@ -269,9 +332,7 @@ class Hybrid(Boundary):
                 "bnd_a0": 0.01 * ctx.c0 ** 2 / ctx.h, "bnd_c0": ctx.c0,
                 "bnd_frac": self.coeffs.wetFraction, "bnd_rho0": ctx.rho0}
 
-    step_init = "bnd_count = 0"
-    step_pair = "if kindb == FLUID:\n    bnd_count += 1"
-    step_final = """\
+    _STEP_FINAL = """\
 bnd_need = math.ceil(bnd_frac * fld[F_nFull, a] - 1e-9)
 if bnd_need > 0 and bnd_count >= bnd_need:
     aux[I_bnd_wet, a] = 1.0
@@ -280,13 +341,16 @@ else:
     rho[a] = bnd_rho0
 """
 
-    def fluid_body(self, full: str, viscous: str) -> str:
-        dry = (viscous + "\n" if self.coeffs.noSlip else "") + _MONAGHAN_KOS
-        return ("if kindb == FLUID or aux[I_bnd_wet, b] > 0.5:\n" + _indent(full) +
-                "\nelif fld[F_wallDist, b] < bnd_dx:\n" + _indent(dry))
+    def neighbour_kinds(self):
+        """Wet walls (the once-per-step count) act as fluid; dry boundary particles (closer
+        than dx to the wall) push and, no-slip, rub; deeper dry rows are ignored."""
+        return {"wetWall": "aux[I_bnd_wet, {i}] > 0.5",
+                "dryWall": "fld[F_wallDist, {i}] < bnd_dx",
+                "noSlipWall": self.coeffs.noSlip}
 
-    def density_body(self, continuity: str) -> str:
-        return "if kindb == FLUID or aux[I_bnd_wet, b] > 0.5:\n" + _indent(continuity)
-
-    def wall_body(self, continuity: str) -> str:
-        return "if aux[I_bnd_wet, a] > 0.5:\n" + _indent(continuity)
+    def terms(self):
+        return [Term("wetDry", ("step",), applies=("wall",), sees=("fluid",),
+                     init="bnd_count = 0", pair="bnd_count += 1", final=self._STEP_FINAL,
+                     reads=("field.nFull",), writes=("aux.bnd_wet", "rho")),
+                Term("wallForce", ("rates",), pair=_MONAGHAN_KOS, sees=("dryWall",),
+                     reads=_GEOMETRY_READS, writes=("acc",))]

@@ -7,17 +7,28 @@ fields in ``aux``, which the rates and density loops then read for a and b.
 
 from __future__ import annotations
 
+import numpy as np
+
+from numba import njit, prange
 from pydantic import Field
 
+from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def add_correction(u, du, kind):
+    """u + du for fluid particles (walls keep their prescribed velocity)."""
+    out = np.empty_like(u)
+    for a in prange(u.shape[0]):
+        out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
+    return out
 
 
 class VelocityCorrection(PipelineModel):
     family = "velocityCorrection"
     prefix = "vc_"
-    #: positions move with u + aux[aux[0]], v + aux[aux[1]] (sphfoam.engine.simulation)
-    advects_positions: bool = False
 
 
 class KernelCorrection(PipelineModel):
@@ -50,23 +61,22 @@ class XSPH(VelocityCorrection):
     name = "xsph"
     doc = ("XSPH: positions and continuity use v_a + eps sum_b m_b/rhobar_ab v_ba W_ab, "
            "T(3.62)-(3.63), P(36)")
-    advects_positions = True
-    aux = ("xsph_du", "xsph_dv")
+    _DV = ("aux.xsph_du", "aux.xsph_dv")
 
     class Coeffs(Coeffs):
         epsilon: float = Field(0.5, gt=0.0, le=1.0, description=(
             "strength of the smoothing, 0 < epsilon <= 1; 0.5 as in T §3.6 and P §3"))
 
-    prepass_init = """\
+    _INIT = """\
 xsph_su = 0.0
 xsph_sv = 0.0
 """
-    prepass_pair = """\
+    _PAIR = """\
 xsph_w = 2.0 * mb / (rhoa + rhob) * Wab
 xsph_su -= xsph_w * u_ab
 xsph_sv -= xsph_w * v_ab
 """
-    prepass_final = """\
+    _FINAL = """\
 if kind[a] == FLUID:
     aux[I_xsph_du, a] = vc_eps * xsph_su
     aux[I_xsph_dv, a] = vc_eps * xsph_sv
@@ -74,13 +84,27 @@ else:
     aux[I_xsph_du, a] = 0.0
     aux[I_xsph_dv, a] = 0.0
 """
-    continuity_velocity_code = """\
+    _UC = """\
 uc_ab = u_ab + aux[I_xsph_du, a] - aux[I_xsph_du, b]
 vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
 """
 
     def params(self, ctx: CaseContext):
         return {"vc_eps": self.coeffs.epsilon}
+
+    def terms(self):
+        return [Term("xsphVelocity", ("prepass",), init=self._INIT, pair=self._PAIR,
+                     final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
+                     writes=self._DV),
+                Term("xsphContinuity", ("rates", "density"), pair=self._UC,
+                     applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",))]
+
+    def advection_velocity(self, sim, u, v):
+        """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own)."""
+        pipe = sim.pipeline
+        du = sim.aux[pipe.aux_index("xsph_du")]
+        dv = sim.aux[pipe.aux_index("xsph_dv")]
+        return add_correction(u, du, sim.state.kind), add_correction(v, dv, sim.state.kind)
 
 
 @register
@@ -148,10 +172,12 @@ class CSPH(KernelCorrection):
     ``symmetric``, its half of every pair gradient is the plain one).
     """
 
-    name = "cspH"
+    name = "csph"
+    aliases = ("cspH",)
     doc = ("C-SPH: Shepard kernel and first-order corrected gradient, c = A^-1 per particle, "
            "P(29)-(32)")
-    aux = ("csph_b11", "csph_b12", "csph_b13", "csph_b22", "csph_b23", "csph_b33", "csph_ok")
+    _B = ("aux.csph_b11", "aux.csph_b12", "aux.csph_b13", "aux.csph_b22", "aux.csph_b23",
+          "aux.csph_b33", "aux.csph_ok")
 
     class Coeffs(Coeffs):
         minDetRatio: float = Field(1e-3, gt=0.0, lt=1.0, description=(
@@ -162,7 +188,7 @@ class CSPH(KernelCorrection):
             "grad~_a W_ab: conserves momentum and is stable at a free surface (P's form is "
             "not), but no longer exact for linear fields"))
 
-    prepass_init = """\
+    _INIT = """\
 csph_m11 = 0.0
 csph_m12 = 0.0
 csph_m13 = 0.0
@@ -170,7 +196,7 @@ csph_m22 = 0.0
 csph_m23 = 0.0
 csph_m33 = 0.0
 """
-    prepass_pair = """\
+    _PAIR = """\
 csph_vw = mb / rhob * Wab
 csph_xs = dx_ab * inv_h
 csph_zs = dy_ab * inv_h
@@ -181,7 +207,7 @@ csph_m22 += csph_vw * csph_xs * csph_xs
 csph_m23 += csph_vw * csph_xs * csph_zs
 csph_m33 += csph_vw * csph_zs * csph_zs
 """
-    prepass_final = """\
+    _FINAL = """\
 csph_k11 = csph_m22 * csph_m33 - csph_m23 * csph_m23
 csph_k12 = csph_m13 * csph_m23 - csph_m12 * csph_m33
 csph_k13 = csph_m12 * csph_m23 - csph_m13 * csph_m22
@@ -206,41 +232,37 @@ else:
     aux[I_csph_b33, a] = 0.0
     aux[I_csph_ok, a] = 0.0
 """
-    #: grad~_a W_ab of P(29)-(32): coefficients of a only
+    #: grad~_a W_ab of P(29)-(32): coefficients of a only (the kernel's plain gradient
+    #: gWx, gWy stays where A is singular)
     _GRADIENT_A = """\
 if aux[I_csph_ok, a] != 0.0:
     gWx = -(aux[I_csph_b12, a] + aux[I_csph_b22, a] * dx_ab + aux[I_csph_b23, a] * dy_ab) * Wab
     gWy = -(aux[I_csph_b13, a] + aux[I_csph_b23, a] * dx_ab + aux[I_csph_b33, a] * dy_ab) * Wab
-else:
-    fw = kern_gw * kernel_dfdq_q(q)
-    gWx = fw * dx_ab
-    gWy = fw * dy_ab
 """
     #: (grad~_a W_ab - grad~_b W_ba) / 2, Bonet & Lok (1999); r_ba = -r_ab
     _GRADIENT_SYMMETRIC = """\
-fw = kern_gw * kernel_dfdq_q(q)
+csph_px = gWx
+csph_py = gWy
 if aux[I_csph_ok, a] != 0.0:
     gWx = -(aux[I_csph_b12, a] + aux[I_csph_b22, a] * dx_ab + aux[I_csph_b23, a] * dy_ab) * Wab
     gWy = -(aux[I_csph_b13, a] + aux[I_csph_b23, a] * dx_ab + aux[I_csph_b33, a] * dy_ab) * Wab
-else:
-    gWx = fw * dx_ab
-    gWy = fw * dy_ab
 if aux[I_csph_ok, b] != 0.0:
     gWx += (aux[I_csph_b12, b] - aux[I_csph_b22, b] * dx_ab - aux[I_csph_b23, b] * dy_ab) * Wab
     gWy += (aux[I_csph_b13, b] - aux[I_csph_b23, b] * dx_ab - aux[I_csph_b33, b] * dy_ab) * Wab
 else:
-    gWx += fw * dx_ab
-    gWy += fw * dy_ab
+    gWx += csph_px
+    gWy += csph_py
 gWx *= 0.5
 gWy *= 0.5
 """
 
-    @property
-    def gradient_code(self) -> str:
-        return self._GRADIENT_SYMMETRIC if self.coeffs.symmetric else self._GRADIENT_A
-
-    def selection_key(self) -> str:
-        return "symmetric" if self.coeffs.symmetric else ""
+    def terms(self):
+        grad = self._GRADIENT_SYMMETRIC if self.coeffs.symmetric else self._GRADIENT_A
+        return [Term("momentMatrix", ("prepass",), init=self._INIT, pair=self._PAIR,
+                     final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
+                     writes=self._B),
+                Term("correctedGradient", ("rates", "density"), pair=grad, applies=("all",),
+                     reads=("W", *self._B), corrects=("gradW",))]
 
     def params(self, ctx: CaseContext):
         return {"kc_detmin": self.coeffs.minDetRatio}

@@ -8,6 +8,7 @@ from typing import Literal
 from numba import njit
 from pydantic import Field
 
+from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
@@ -69,9 +70,15 @@ class Tait(PipelineModel):
         return {"eos_rho0": ctx.rho0, "eos_B": self.B(ctx), "eos_c0": self.c0(ctx),
                 "eos_gamma": self.coeffs.gamma}
 
-    # generated per-particle code: p and c from rho
-    eos_code = ("p[a] = eos_pressure(rho[a], eos_rho0, eos_B, eos_gamma)\n"
-                "c[a] = eos_sound_speed(rho[a], eos_rho0, eos_c0, eos_gamma)")
+    def terms(self):
+        """p and c of every particle from its density, T(3.27)-(3.29)."""
+        return [Term("pressure", ("particle",), applies=("all",), writes=("p", "c"),
+                     final="p[a] = eos_pressure(rho[a], eos_rho0, eos_B, eos_gamma)\n"
+                           "c[a] = eos_sound_speed(rho[a], eos_rho0, eos_c0, eos_gamma)")]
+
+    def pressure(self, rho, ctx: CaseContext):
+        """T(3.27) for a numpy array of densities (set-up, output)."""
+        return self.B(ctx) * ((rho / ctx.rho0) ** self.coeffs.gamma - 1.0)
 
     def density(self, p, ctx: CaseContext):
         """Inverse of T(3.27), for hydrostatic initial states."""

@@ -2,48 +2,62 @@
 
 from __future__ import annotations
 
+from sphfoam.engine.terms import Term
 from sphfoam.models.base import PipelineModel
 from sphfoam.registry import register
+
+#: the continuity equation runs for fluid particles and for wall particles whose density
+#: evolves (wet walls), in the rates and the density-only pass
+_CONTINUITY = dict(stages=("rates", "density"), applies=("fluid", "wetWall"))
 
 
 class Continuity(PipelineModel):
     family = "continuity"
     prefix = "cont_"
-    #: lines run inside the pair loop, adding to drho_a
-    pair_code: str
+    #: drho_a += ..., per neighbour (reads grad W and the continuity velocity uc_ab, vc_ab)
+    drho_code: str
+
+    def terms(self):
+        return [Term("continuityVelocity", pair="U@c_ab = U@_ab", writes=("uc",),
+                     **_CONTINUITY),
+                Term("continuity", pair=self.drho_code, reads=("gradW", "uc"),
+                     writes=("drho",), **_CONTINUITY)]
 
 
 @register
 class DifferenceForm(Continuity):
     name = "differenceForm"
     doc = "drho_a/dt = sum_b m_b v_ab . grad_a W_ab, T(3.18)"
-    pair_code = "drho_a += mb * (uc_ab * gWx + vc_ab * gWy)"
+    drho_code = "drho_a += mb * (uc_ab * gWx + vc_ab * gWy)"
 
 
 @register
 class DensityWeighted(Continuity):
     name = "densityWeighted"
     doc = "drho_a/dt = rho_a sum_b (m_b / rho_b) v_ab . grad_a W_ab, T(3.17)"
-    pair_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
+    drho_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
 
 
 class Momentum(PipelineModel):
     family = "momentum"
     prefix = "mom_"
     #: lines run once per particle a before its pair loop
-    particle_code: str = ""
-    #: lines run inside the pair loop, adding the pressure term to acc_x, acc_y
+    init_code: str = ""
+    #: lines run inside the pair loop, adding the pressure term to acc_@
     pair_code: str
+
+    def terms(self):
+        return [Term("pressureGradient", ("rates",), init=self.init_code,
+                     pair=self.pair_code, reads=("gradW",), writes=("acc",))]
 
 
 @register
 class Symmetric(Momentum):
     name = "symmetric"
     doc = "dv_a/dt = -sum_b m_b (p_a/rho_a^2 + p_b/rho_b^2) grad_a W_ab, T(3.24), T(3.26)"
-    particle_code = "pa_rho2 = pa / (rhoa * rhoa)"
+    init_code = "pa_rho2 = pa / (rhoa * rhoa)"
     pair_code = ("pterm = mb * (pa_rho2 + pb / (rhob * rhob))\n"
-                 "acc_x -= pterm * gWx\n"
-                 "acc_y -= pterm * gWy")
+                 "acc_@ -= pterm * gW@")
 
 
 @register
@@ -51,5 +65,4 @@ class ColagrossiLandrini(Momentum):
     name = "colagrossiLandrini"
     doc = "dv_a/dt = -sum_b m_b (p_a + p_b)/(rho_a rho_b) grad_a W_ab, T(3.25)"
     pair_code = ("pterm = mb * (pa + pb) / (rhoa * rhob)\n"
-                 "acc_x -= pterm * gWx\n"
-                 "acc_y -= pterm * gWy")
+                 "acc_@ -= pterm * gW@")

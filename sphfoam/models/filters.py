@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from pydantic import Field
 
+from sphfoam.engine.schedule import Schedule
+from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
@@ -25,10 +27,23 @@ from sphfoam.registry import Coeffs, register
 class DensityFilter(PipelineModel):
     family = "densityFilter"
     prefix = "filt_"
-    #: the periodic pass (see sphfoam.models.base); empty: no pass, no ``density_filter``
+    #: the periodic pass over every neighbour of a fluid particle a, setting ``rho_new``;
+    #: empty: no pass, no ``density_filter``
     filter_init: str = ""
     filter_pair: str = ""
     filter_final: str = ""
+
+    def terms(self):
+        if not self.filter_pair:
+            return []
+        return [Term("densityFilter", ("filter",), init=self.filter_init,
+                     pair=self.filter_pair, final=self.filter_final, sees=("all",),
+                     reads=("W",), writes=("rho_new",))]
+
+    def schedule(self):
+        """The periodic pass runs before the steps whose index is a multiple of ``every``."""
+        every = getattr(self.coeffs, "every", None)
+        return Schedule.every(every) if self.filter_pair and every else None
 
 
 #: the self contribution b = a of the kernel sums: W(0) = kern_w f(0) (the kernel's names)
@@ -163,6 +178,9 @@ class DeltaSPH(DensityFilter):
                              "(CaseContext.c0)")
         return {"filt_dc0": self.coeffs.delta * ctx.c0}
 
-    pair_code = (
-        "filt_psi = 2.0 * (rhoa - rhob) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)\n"
-        "drho_a += filt_dc0 * h * filt_psi * mb / rhob\n")
+    def terms(self):
+        return [Term("densityDiffusion", ("rates", "density"), reads=("gradW",),
+                     writes=("drho",), pair=(
+                         "filt_psi = 2.0 * (rhoa - rhob) * (dx_ab * gWx + dy_ab * gWy) / "
+                         "(r2 + eta2)\n"
+                         "drho_a += filt_dc0 * h * filt_psi * mb / rhob\n"))]

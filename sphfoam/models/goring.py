@@ -58,6 +58,9 @@ class Goring(WaveMaker):
         self.travel = -2.0 * self.xi0                                    # final X (odd xi)
 
     # --- T(4.19)-(4.21) ----------------------------------------------------------------------
+    def solitary_wave(self) -> tuple[float, float]:
+        return float(self.coeffs.height), float(self.coeffs.depth)
+
     def _solve(self, tp: float) -> float:
         """theta(t') solving theta + (H/d) tanh(theta) = kappa c t' by Newton T(4.21),
         warm-started from the previous solution, to |d theta| <= 1e-12 (then quadratically

@@ -269,9 +269,7 @@ class Verlet(Model):
         sim.eos()
         sim.rates()                               # F^n, D^n
         dt = min(sim.time_step(), dt_remaining)
-        filtered = (sim.filter_every and sim.step_index > 0
-                    and sim.step_index % sim.filter_every == 0)
-        euler = (not valid) or filtered or sim.step_index % self.coeffs.everyN == 0
+        euler = (not valid) or sim.filtered or sim.step_index % self.coeffs.everyN == 0
         ex = st.extra
         dtv = float(ex["deltaT_0"][0]) + dt if valid else 2.0 * dt
         pu, pv = sim.position_velocity(st.u, st.v)

@@ -11,6 +11,7 @@ import math
 from numba import njit
 from pydantic import Field
 
+from sphfoam.engine.terms import LOOP_STAGES, Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
@@ -117,11 +118,21 @@ class Kernel(PipelineModel):
     class Coeffs(Coeffs):
         hdx: float = Field(1.3, gt=0.5, le=3.0, description="smoothing length h = hdx * dx")
 
+    @property
+    def f_jit(self):
+        """The jitted f(q), for other numba code (sampling) to call."""
+        return globals()[self.f_name]
+
+    @property
+    def dfdq_q_jit(self):
+        """The jitted (df/dq)/q."""
+        return globals()[self.dfdq_q_name]
+
     def f(self, q):
-        return globals()[self.f_name](q)
+        return self.f_jit(q)
 
     def dfdq_q(self, q):
-        return globals()[self.dfdq_q_name](q)
+        return self.dfdq_q_jit(q)
 
     def imports(self):
         return [f"from sphfoam.models.kernels import {self.f_name} as kernel_f, "
@@ -131,12 +142,28 @@ class Kernel(PipelineModel):
         h = ctx.h
         return {"kern_w": self.alpha_2d / h**2, "kern_gw": self.alpha_2d / h**4}
 
+    def terms(self):
+        """W_ab and grad_a W_ab = alpha_d / h^4 (df/dq / q) r_ab, wherever a term reads them."""
+        return [Term("kernelValue", LOOP_STAGES, pair="Wab = kern_w * kernel_f(q)",
+                     applies=("all",), writes=("W",)),
+                Term("kernelGradient", LOOP_STAGES,
+                     pair="fw = kern_gw * kernel_dfdq_q(q)\ngW@ = fw * d@_ab",
+                     applies=("all",), writes=("gradW",))]
+
+    def h(self, dx: float) -> float:
+        """Smoothing length h = hdx dx."""
+        return self.coeffs.hdx * dx
+
+    def support_radius(self, h: float) -> float:
+        """kappa h: W = 0 beyond it."""
+        return self.support * h
+
     def W(self, r, h):
         """Kernel value for a numpy/scalar distance (tests and post-processing)."""
         import numpy as np
 
         q = np.asarray(r, dtype=float) / h
-        return self.alpha_2d / h**2 * np.vectorize(globals()[self.f_name])(q)
+        return self.alpha_2d / h**2 * np.vectorize(self.f_jit)(q)
 
 
 @register

@@ -307,7 +307,7 @@ class WaveHeight(_GaugeMetric):
 
 
 def case_wave_height(case_path) -> float | None:
-    """The target height of the case's wave: its Goring paddle's, else its first initial
+    """The target height of the case's wave: its wave maker's, else its first initial
     wave's; None when it has neither."""
     from sphfoam.case.case import Case
 
@@ -315,8 +315,9 @@ def case_wave_height(case_path) -> float | None:
     try:
         for mot in case.models.motions.values():
             maker = getattr(mot, "maker", None)
-            if maker is not None and maker.name == "goring":
-                return float(maker.coeffs.height)
+            wave = maker.solitary_wave() if maker is not None else None
+            if wave is not None:
+                return wave[0]
         for w, _ in case.waves.values():
             return float(w.height)
     except CaseError:               # not a whole case (output files only): no default

@@ -1,6 +1,7 @@
-"""The ``none`` entry of families whose real models arrive in later releases of sphfoam.
+"""The ``none`` entry of the optional families (turbulence, densityFilter,
+velocityCorrection, kernelCorrection).
 
-Selecting ``none`` adds nothing to the generated pipeline (it costs nothing).
+Selecting ``none`` contributes no term to the generated pipeline: it costs nothing.
 """
 
 from __future__ import annotations

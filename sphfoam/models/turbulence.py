@@ -8,8 +8,9 @@ from __future__ import annotations
 
 from pydantic import Field
 
+from sphfoam.engine.terms import Term
 from sphfoam.models.base import PipelineModel
-from sphfoam.models.viscosity import _GRADIENT_INIT, _GRADIENT_PAIR
+from sphfoam.models.viscosity import velocity_gradient_term
 from sphfoam.registry import Coeffs, register
 
 
@@ -45,10 +46,7 @@ class SmagorinskySPS(Turbulence):
         CI: float = Field(0.0066, ge=0.0, description="constant CI of the isotropic term of "
                           "T(3.58)")
 
-    aux = ("turb_txx", "turb_txy", "turb_tyy")
-    prepass_init = _GRADIENT_INIT.format(p="sps")
-    prepass_pair = _GRADIENT_PAIR.format(p="sps")
-    prepass_final = """\
+    _STRESS = """\
 sps_sxy = 0.5 * (sps_dudy + sps_dvdx)                                  # T(3.59)
 sps_s2 = 2.0 * (sps_dudx * sps_dudx + sps_dvdy * sps_dvdy + 2.0 * sps_sxy * sps_sxy)  # |S|^2
 sps_nut = turb_cs2 * math.sqrt(sps_s2)                                 # T(3.60)
@@ -58,16 +56,22 @@ aux[I_turb_txy, a] = 2.0 * sps_nut * sps_sxy
 aux[I_turb_tyy, a] = 2.0 * sps_nut * sps_dvdy + sps_iso"""
 
     # tau/rho^2 of a = aux/rho_a, loaded once per particle
-    particle_code = """\
+    _INIT = """\
 sps_xx_a = aux[I_turb_txx, a] / rhoa
 sps_xy_a = aux[I_turb_txy, a] / rhoa
 sps_yy_a = aux[I_turb_tyy, a] / rhoa"""
-    pair_code = """\
+    _PAIR = """\
 sps_xx = sps_xx_a + aux[I_turb_txx, b] / rhob
 sps_xy = sps_xy_a + aux[I_turb_txy, b] / rhob
 sps_yy = sps_yy_a + aux[I_turb_tyy, b] / rhob
 acc_x += mb * (sps_xx * gWx + sps_xy * gWy)
 acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
+
+    _TAU = ("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy")
+
+    def terms(self):
+        return [velocity_gradient_term("sps", self._STRESS, self._TAU),
+                Term("spsStress", ("rates",), init=self._INIT, pair=self._PAIR, reads=("gradW", *self._TAU), writes=("acc",))]
 
     def params(self, ctx):
         return {"turb_cs2": (self.coeffs.Cs * ctx.dx) ** 2,

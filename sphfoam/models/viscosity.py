@@ -7,14 +7,29 @@ from typing import Literal
 
 from pydantic import Field
 
+from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
+
+
+#: viscous terms see fluid, ghosts, wet walls and, at a no-slip boundary, dry walls
+VISCOUS_SEES = ("fluid", "ghost", "wetWall", "noSlipWall")
 
 
 class Viscosity(PipelineModel):
     family = "viscosity"
     prefix = "visc_"
+    #: per neighbour, adding the viscous term to acc_@ ("" = none)
     pair_code: str = ""
+    #: per particle a before its loop
+    init_code: str = ""
+    reads: tuple[str, ...] = ("gradW",)
+
+    def terms(self):
+        if not self.pair_code:
+            return []
+        return [Term("viscosity", ("rates",), init=self.init_code, pair=self.pair_code,
+                     sees=VISCOUS_SEES, reads=self.reads, writes=("acc",))]
 
 
 @register
@@ -42,8 +57,7 @@ class Artificial(Viscosity):
 
     pair_code = ("if vdotr < 0.0:\n"
                  "    pi_ab = -visc_alpha * h * (ca + cb) / (rhoa + rhob) * vdotr / (r2 + eta2)\n"
-                 "    acc_x -= mb * pi_ab * gWx\n"
-                 "    acc_y -= mb * pi_ab * gWy")
+                 "    acc_@ -= mb * pi_ab * gW@")
 
 
 @register
@@ -68,8 +82,7 @@ class Laminar(Viscosity):
         return 0.125 * ctx.h * ctx.h / ctx.nu
 
     pair_code = ("lam = mb * visc_mu2 / (rhoa * rhob) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)\n"
-                 "acc_x += lam * u_ab\n"
-                 "acc_y += lam * v_ab")
+                 "acc_@ += lam * U@_ab")
 
 
 #: SPH velocity gradient of particle a, T(3.37) with the sign of T(3.61) / T(3.14):
@@ -87,6 +100,14 @@ _GRADIENT_PAIR = """\
 {p}_dvdx -= {p}_vb * v_ab * gWx
 {p}_dvdy -= {p}_vb * v_ab * gWy
 """
+
+
+def velocity_gradient_term(p: str, final: str, writes: tuple[str, ...]) -> Term:
+    """The pre-pass of T(3.37)/(3.61): the SPH velocity gradient of every particle (walls
+    included, over every neighbour) into ``{p}_dudx`` ... ``{p}_dvdy``, then ``final``."""
+    return Term("velocityGradient", ("prepass",), init=_GRADIENT_INIT.format(p=p),
+                pair=_GRADIENT_PAIR.format(p=p), final=final, applies=("all",),
+                sees=("all",), reads=("gradW",), writes=writes)
 
 
 @register
@@ -113,12 +134,14 @@ class ImprovedArtificial(Viscosity):
             "colagrossiLandrini", description="k_a: `colagrossiLandrini` uses the strain rate "
             "sqrt(S_ij S_ij), T(3.35); `balsara` the vorticity |curl v|, T(3.34)")
 
-    aux = ("visc_k",)
-    prepass_init = _GRADIENT_INIT.format(p="ivd")
-    prepass_pair = _GRADIENT_PAIR.format(p="ivd")
+    reads = ("gradW", "aux.visc_k")
 
-    @property
-    def prepass_final(self) -> str:
+    def terms(self):
+        return [velocity_gradient_term("ivd", self.switch_code(), ("aux.visc_k",)),
+                *super().terms()]
+
+    def switch_code(self) -> str:
+        """k_a of T(3.34) or T(3.35)-(3.36) from the velocity gradient, into aux visc_k."""
         if self.coeffs.switch == "balsara":
             other = "ivd_other = abs(ivd_dvdx - ivd_dudy)                  # |curl v|, T(3.34)\n"
         else:
@@ -132,12 +155,8 @@ class ImprovedArtificial(Viscosity):
     def params(self, ctx):
         return {"visc_alpha": self.coeffs.alpha}
 
-    def selection_key(self) -> str:
-        return self.coeffs.switch
-
-    particle_code = "ivd_ka = aux[I_visc_k, a]"
+    init_code = "ivd_ka = aux[I_visc_k, a]"
     pair_code = ("if vdotr < 0.0:\n"
                  "    pi_ab = (-visc_alpha * h * (ca + cb) / (rhoa + rhob)\n"
                  "             * 0.5 * (ivd_ka + aux[I_visc_k, b]) * vdotr / (r2 + eta2))\n"
-                 "    acc_x -= mb * pi_ab * gWx\n"
-                 "    acc_y -= mb * pi_ab * gWy")
+                 "    acc_@ -= mb * pi_ab * gW@")

@@ -22,6 +22,11 @@ class WaveMaker(Model, abc.ABC):
     def velocity(self, t: float) -> float:
         """dX/dt (m/s)."""
 
+    def solitary_wave(self) -> tuple[float, float] | None:
+        """(H, d) of the solitary wave this maker generates, for metrics and plots; None for
+        a maker that makes no single solitary wave."""
+        return None
+
 
 @register
 class Sinusoidal(WaveMaker):

@@ -12,6 +12,7 @@ from typing import Literal
 
 from pydantic import Field
 
+from sphfoam.engine.schedule import Schedule
 from sphfoam.registry import Coeffs, Model
 
 
@@ -32,20 +33,21 @@ class FunctionObject(Model, abc.ABC):
         self.file = self.folder / f"{self.object_name}.dat"
         self._fh = self.file.open("w")
         self._fh.write(f"# {self.name}: {self.doc}\n# " + "\t".join(self.columns) + "\n")
-        self._next = None
-        self._steps = 0
 
-    def due(self, sim, wrote: bool) -> bool:
+    @property
+    def schedule(self) -> Schedule:
+        """When this function object samples during a run: every writeInterval steps of the
+        run's step index, whenever the time crosses a multiple of writeInterval, or at
+        time-directory writes; the same steps and times after a restart."""
         c = self.coeffs
-        self._steps += 1
-        if c.writeControl == "writeTime":
-            return wrote
-        if c.writeControl == "timeStep":
-            return self._steps % int(c.writeInterval) == 0
-        if self._next is None or sim.time >= self._next - 1e-12:
-            self._next = (int(sim.time / c.writeInterval + 1e-9) + 1) * c.writeInterval
-            return True
-        return False
+        return Schedule(c.writeControl, c.writeInterval)
+
+    def due(self, sim, wrote: bool, previous_time: float | None = None) -> bool:
+        """Whether the step that took ``sim`` from ``previous_time`` (by default, the time
+        before its last step) samples."""
+        if previous_time is None:
+            previous_time = sim.time - sim.last_dt
+        return self.schedule.due(sim.step_index, sim.time, previous_time, wrote)
 
     def write_row(self, values) -> None:
         self._fh.write("\t".join(f"{v:.9g}" for v in values) + "\n")

@@ -109,7 +109,9 @@ class VelocityProfile(FunctionObject):
     def _eps(self, t: float) -> float:
         return 1e-9 * max(1.0, abs(t))
 
-    def due(self, sim, wrote: bool) -> bool:
+    def due(self, sim, wrote: bool, previous_time: float | None = None) -> bool:
+        """Every step of the averaging window before each requested time (a function of the
+        simulated time alone, so a restart samples the same steps)."""
         return bool(self.pending) and \
             sim.time >= self.pending[0] - self.coeffs.window - self._eps(sim.time)
 

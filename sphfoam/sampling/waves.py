@@ -133,9 +133,7 @@ def sph_interpolate(x, y, vol, fields, xq, yq, kernel, h) -> np.ndarray:
     support are used (the normalisation alpha_d / h^2 cancels). Points with no particle
     within the kernel support give NaN.
     """
-    from sphfoam.models import kernels as kernel_module
-
-    f = getattr(kernel_module, kernel.f_name)
+    f = kernel.f_jit
     x = np.asarray(x, dtype=float)
     order = np.argsort(x, kind="stable")
     xs = np.ascontiguousarray(x[order])

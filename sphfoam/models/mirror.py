@@ -129,7 +129,7 @@ def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip):
 
 
 def segment_array(segments, offsets=None, velocities=None) -> np.ndarray:
-    """The (S, 9) array of :mod:`sphfoam.engine.ghosts` from :class:`Segment` s, each moved by
+    """The (S, 9) array of :mod:`sphfoam.models.mirror` from :class:`Segment` s, each moved by
     ``offsets[patch]`` and moving with ``velocities[patch]`` (both optional dicts)."""
     out = np.zeros((len(segments), 9))
     for i, s in enumerate(segments):

@@ -1,0 +1,204 @@
+"""The contract between a model and the engine: named terms with declared stages and data.
+
+A model contributes :class:`Term` objects (``PipelineModel.terms``). Each term says
+
+* **where** it runs: its ``stages`` (see :data:`STAGES`), the kinds of particle ``a`` it
+  ``applies`` to and the kinds of neighbour ``b`` it ``sees`` (see :data:`PARTICLE_KINDS`,
+  :data:`NEIGHBOUR_KINDS`);
+* **what** it runs: ``init`` (per particle a, before its neighbour loop), ``pair`` (per
+  neighbour b) and ``final`` (per particle a, after the loop), numba-compatible Python;
+* **what it touches**: ``reads`` and ``writes``, from :data:`QUANTITIES` or ``aux.<name>``
+  (a per-particle auxiliary field, ``aux[I_<name>, i]`` in the code) or ``field.<name>`` (a
+  per-particle field written by the set-up, ``fld[F_<name>, i]``).
+
+The generator (``sphfoam.engine.codegen``) assembles each stage from these declarations alone:
+which terms enter which loop, in which order (a term that defines or corrects a pair quantity
+comes before the terms reading it), whether the kernel value is computed (only if a term of
+that loop reads ``W``), which auxiliary fields exist. :func:`check` rejects, before anything
+compiles, a quantity defined or corrected by two models, and a quantity or field read that
+nothing provides, naming the models involved.
+
+Vector components. A line containing ``@`` is written once per spatial component with ``@``
+replaced by ``x``, ``y`` (and ``z`` in three dimensions), and ``U@`` by the velocity
+component ``u``, ``v`` (``w``): ``acc_@ -= pterm * gW@`` is ``acc_x -= pterm * gWx`` and
+``acc_y -= pterm * gWy``. A backend for another dimension or device expands the same text
+with its own components (see docs/developing.md).
+"""
+
+from __future__ import annotations
+
+import textwrap
+from dataclasses import dataclass, field, replace
+
+#: stages of a time step, in the order of the generated module
+STAGES = {
+    "particle": "per particle, no neighbours (the equation of state: p, c from rho)",
+    "step": "once per step after the neighbour update, with a neighbour loop "
+            "(e.g. the wet/dry state of wall particles)",
+    "prepass": "before every evaluation of the rates, with a neighbour loop: per-particle "
+               "auxiliary fields the pair terms read (XSPH, C-SPH, velocity gradients)",
+    "rates": "dv/dt and drho/dt (and sigma of T(3.89)) of every particle, gathered over "
+             "neighbours",
+    "density": "drho/dt alone (the last stage of Monaghan's 2007 scheme, T(3.96))",
+    "filter": "a periodic density pass setting rho_new of each particle (densityFilter)",
+}
+
+#: the stages with a neighbour loop
+LOOP_STAGES = ("step", "prepass", "rates", "density", "filter")
+
+#: kinds of neighbour b; each neighbour is of at most one kind. ``fluid`` is the engine's
+#: (kind FLUID); the others exist only where a model defines them (``neighbour_kinds``);
+#: a neighbour of no kind is seen only by terms that see ``all``
+NEIGHBOUR_KINDS = ("fluid", "ghost", "wetWall", "dryWall")
+#: what a term may name in ``sees``: the kinds above, ``all`` (every neighbour, whatever its
+#: kind) and ``noSlipWall`` (the dry walls that enter viscous terms: those of a no-slip
+#: boundary, none of a free-slip one)
+SEES = (*NEIGHBOUR_KINDS, "noSlipWall", "all")
+#: kinds of particle a a term may apply to: ``fluid``, ``wall`` (any wall particle),
+#: ``wetWall`` (a wall particle the boundary treats as fluid), ``all``
+PARTICLE_KINDS = ("fluid", "wall", "wetWall", "all")
+
+#: quantities of a neighbour pair or of a particle a term may define, correct or read besides
+#: the engine's loads (x, u, rho, p, c, m of a and b, dx_ab, r2, q, u_ab, vdotr, h, inv_h,
+#: eta2, gravity), with the names they have in the code
+QUANTITIES = {
+    "W": "Wab, the kernel value W(r_ab, h)",
+    "gradW": "gWx, gWy: grad_a W_ab",
+    "uc": "uc_ab, vc_ab: the velocity difference the continuity equation uses",
+    "acc": "acc_x, acc_y: dv_a/dt (accumulated)",
+    "drho": "drho_a: drho_a/dt (accumulated)",
+    "rho_new": "rho_new: the filtered density of a (filter stage)",
+    "rho": "rho[a]: the density of a, set in place (step stage)",
+    "p": "p[a]: pressure (particle stage)",
+    "c": "c[a]: sound speed (particle stage)",
+}
+#: quantities each of which exactly one model defines (another may correct it)
+EXCLUSIVE = ("W", "gradW", "uc", "rho_new", "p", "c")
+
+
+@dataclass(frozen=True)
+class Term:
+    """One term a model contributes to the generated pipeline (see the module docstring)."""
+
+    name: str
+    stages: tuple[str, ...]
+    pair: str = ""
+    init: str = ""
+    final: str = ""
+    applies: tuple[str, ...] = ("fluid",)
+    sees: tuple[str, ...] = ("fluid", "ghost", "wetWall")
+    reads: tuple[str, ...] = ()
+    writes: tuple[str, ...] = ()
+    #: quantities this term changes after their definer (e.g. a kernel correction of gradW)
+    corrects: tuple[str, ...] = ()
+    #: the model that contributed it (set by :func:`collect`)
+    owner: object = field(default=None, compare=False)
+
+    @property
+    def on_demand(self) -> bool:
+        """A term that only defines pair quantities is emitted where some term reads them."""
+        return bool(self.writes) and all(w in ("W", "gradW", "uc") for w in self.writes) \
+            and not self.corrects
+
+    def who(self) -> str:
+        o = self.owner
+        return f"{o.family} {o.name!r} (term {self.name!r})" if o is not None else self.name
+
+
+class ContractError(ValueError):
+    """A selection whose terms do not fit together (raised before anything compiles)."""
+
+
+def expand_components(code: str, dims=(("x", "u"), ("y", "v"))) -> str:
+    """Write every line holding ``@`` once per component (see the module docstring)."""
+    out = []
+    for line in textwrap.dedent(code).strip("\n").splitlines():
+        if "@" not in line:
+            out.append(line)
+            continue
+        for axis, vel in dims:
+            out.append(line.replace("U@", vel).replace("@", axis))
+    return "\n".join(out)
+
+
+def collect(models) -> list[Term]:
+    """Every term of the selected models, in selection order, with its owner."""
+    terms = []
+    for m in models:
+        for t in m.terms():
+            unknown = [s for s in t.stages if s not in STAGES]
+            bad_sees = [s for s in t.sees if s not in SEES]
+            bad_applies = [s for s in t.applies if s not in PARTICLE_KINDS]
+            if unknown or bad_sees or bad_applies:
+                raise ContractError(
+                    f"{m.family} {m.name!r}, term {t.name!r}: unknown "
+                    + "; ".join(f"{what} {vals}" for what, vals in
+                                (("stage", unknown), ("neighbour kind", bad_sees),
+                                 ("particle kind", bad_applies)) if vals))
+            terms.append(replace(t, owner=m))
+    return terms
+
+
+def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object]) -> None:
+    """Conflicts and missing inputs, naming the models involved."""
+    definers: dict[str, Term] = {}
+    correctors: dict[str, Term] = {}
+    aux_writers: dict[str, Term] = {}
+    for t in terms:
+        for w in t.writes:
+            if w in EXCLUSIVE:
+                other = definers.get(w)
+                if other is not None and other.owner is not t.owner:
+                    raise ContractError(f"{t.who()} and {other.who()} both define {w!r} "
+                                        f"({QUANTITIES[w]}); select one of them")
+                definers.setdefault(w, t)
+            elif w.startswith("aux."):
+                other = aux_writers.get(w)
+                if other is not None and other.owner is not t.owner:
+                    raise ContractError(f"{t.who()} and {other.who()} both write the "
+                                        f"auxiliary field {w[4:]!r}")
+                aux_writers.setdefault(w, t)
+            elif w not in QUANTITIES:
+                raise ContractError(f"{t.who()} writes {w!r}, which is neither a quantity "
+                                    f"({', '.join(QUANTITIES)}) nor aux.<name>")
+        for c in t.corrects:
+            other = correctors.get(c)
+            if other is not None and other.owner is not t.owner:
+                raise ContractError(f"{t.who()} and {other.who()} both correct {c!r} "
+                                    f"({QUANTITIES.get(c, c)}); select one of them")
+            correctors[c] = t
+    for c, t in correctors.items():
+        if c not in definers:
+            raise ContractError(f"{t.who()} corrects {c!r}, which no selected model defines")
+    for t in terms:
+        for r in t.reads:
+            if r.startswith("aux."):
+                if r not in aux_writers:
+                    raise ContractError(f"{t.who()} reads the auxiliary field {r[4:]!r}, "
+                                        "which no selected model writes")
+            elif r.startswith("field."):
+                if r[6:] not in fields:
+                    raise ContractError(f"{t.who()} reads the particle field {r[6:]!r}, "
+                                        "which the selected boundary does not set up")
+            elif r in EXCLUSIVE:
+                if r not in definers:
+                    raise ContractError(f"{t.who()} reads {r!r} ({QUANTITIES[r]}), which "
+                                        "no selected model defines")
+            elif r not in QUANTITIES:
+                raise ContractError(f"{t.who()} reads {r!r}: not a quantity "
+                                    f"({', '.join(QUANTITIES)}), aux.<name> or field.<name>")
+        if "noSlipWall" in t.sees and "dryWall" in t.sees:
+            raise ContractError(f"{t.who()} sees both dryWall and noSlipWall")
+    del kinds_defined
+
+
+def order(terms: list[Term]) -> list[Term]:
+    """Definers of a quantity, then its correctors, then its readers; otherwise selection
+    order (stable)."""
+    def rank(t: Term) -> int:
+        if t.on_demand:
+            return {"W": 0, "gradW": 1, "uc": 3}[t.writes[0]]
+        if t.corrects:
+            return 2 if "gradW" in t.corrects else 4
+        return 5
+    return sorted(terms, key=rank)

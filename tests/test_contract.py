@@ -1,0 +1,285 @@
+"""The model-engine contract (sphfoam.engine.terms): declared terms, conflicts found before
+anything compiles, an engine and a runner that name no model, one schedule, no import cycle."""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sphfoam
+from sphfoam import registry
+from sphfoam.case.schemas import SPH_FAMILIES
+from sphfoam.engine import terms as T
+from sphfoam.engine.codegen import CORE_PARAMS, Assembly, Selection, generate_source
+from sphfoam.engine.schedule import Schedule
+from sphfoam.models.base import CaseContext, PipelineModel
+
+PKG = Path(sphfoam.__file__).parent
+CTX = CaseContext(dx=0.01, h=0.013, rho0=1000.0, nu=1e-6, g=(0.0, -9.81), fluid_height=0.3,
+                  c0=20.0)
+BASE = {"kernel": {"type": "wendlandC2"}, "equationOfState": {"type": "tait"},
+        "continuity": {"type": "differenceForm"}, "momentum": {"type": "symmetric"},
+        "viscosity": {"type": "artificial"}, "boundary": {"type": "stationaryGhosts"}}
+
+
+def selection(**over) -> Selection:
+    specs = {f: BASE.get(f, {"type": d}) for f, d in SPH_FAMILIES.items()}
+    specs.update(over)
+    return Selection(**{f: registry.build(f, s) for f, s in specs.items()})
+
+
+def source(sel: Selection) -> str:
+    names = list(CORE_PARAMS) + [k for m in sel.models() for k in m.params(CTX)]
+    return generate_source(sel, names)
+
+
+# --- conflicts, before anything compiles -----------------------------------------------------
+class _GradientTwin(PipelineModel):
+    """A second kernel correction written for this test: it corrects grad W too."""
+
+    family = "kernelCorrection"
+    name = "testGradientTwin"
+    doc = "test model: scales grad W (conflicts with csph)"
+    prefix = "kc_"
+
+    def terms(self):
+        return [T.Term("twin", ("rates",), pair="gWx *= 1.0", applies=("all",),
+                       reads=("gradW",), corrects=("gradW",))]
+
+
+class _Orphan(PipelineModel):
+    family = "velocityCorrection"
+    name = "testOrphan"
+    doc = "test model: reads an auxiliary field nothing writes"
+    prefix = "vc_"
+
+    def terms(self):
+        return [T.Term("orphan", ("rates",), pair="acc_x += aux[I_nobody, b]",
+                       reads=("aux.nobody",), writes=("acc",))]
+
+
+def test_two_models_correcting_the_gradient_are_named():
+    sel = selection(kernelCorrection={"type": "csph"})
+    sel.turbulence = _GradientTwin()       # a second corrector in another slot
+    with pytest.raises(T.ContractError) as e:
+        Assembly(sel)
+    msg = str(e.value)
+    assert "csph" in msg and "testGradientTwin" in msg and "gradW" in msg
+
+
+def test_a_term_reading_an_unwritten_field_is_named():
+    sel = selection()
+    sel.velocityCorrection = _Orphan()
+    with pytest.raises(T.ContractError, match="testOrphan.*'nobody'"):
+        Assembly(sel)
+
+
+def test_unknown_stage_and_kind_are_refused():
+    class Bad(_Orphan):
+        name = "testBad"
+
+        def terms(self):
+            return [T.Term("bad", ("postStep",), sees=("walls",))]
+
+    sel = selection()
+    sel.velocityCorrection = Bad()
+    with pytest.raises(T.ContractError, match="testBad.*stage.*postStep.*neighbour kind"):
+        Assembly(sel)
+
+
+def test_components_are_expanded_through_the_contract():
+    assert T.expand_components("acc_@ -= p * gW@\nq = 1") == \
+        "acc_x -= p * gWx\nacc_y -= p * gWy\nq = 1"
+    assert T.expand_components("acc_@ += lam * U@_ab") == \
+        "acc_x += lam * u_ab\nacc_y += lam * v_ab"
+    three = T.expand_components("acc_@ += lam * U@_ab", (("x", "u"), ("y", "v"), ("z", "w")))
+    assert three.splitlines()[-1] == "acc_z += lam * w_ab"
+
+
+# --- declarations agree with the code ---------------------------------------------------------
+def _pipeline_models():
+    for fam, models in registry.families().items():
+        for name, cls in models.items():
+            if issubclass(cls, PipelineModel):
+                yield cls()
+                if hasattr(cls.Coeffs, "model_fields") and "symmetric" in \
+                        cls.Coeffs.model_fields:
+                    yield cls(cls.Coeffs(symmetric=False))
+
+
+@pytest.mark.parametrize("model", list(_pipeline_models()), ids=lambda m: f"{m.family}-{m.name}")
+def test_declared_reads_and_writes_match_the_code(model):
+    """What a term reads and writes is declared: the test reads the code so that the
+    generator never has to."""
+    for t in model.terms():
+        code = "\n".join((t.init, t.pair, t.final))
+        declared = set(t.reads) | set(t.writes) | set(t.corrects)
+        assert ("Wab" in code) == ("W" in declared), (t.name, "W")
+        assert ("gWx" in code or "gW@" in code) == ("gradW" in declared), (t.name, "gradW")
+        for a in re.findall(r"aux\[I_(\w+),", code):
+            assert f"aux.{a}" in declared, (t.name, a)
+        for f in re.findall(r"fld\[F_(\w+),", code):
+            assert f"field.{f}" in declared, (t.name, f)
+        if "acc_" in code:
+            assert "acc" in declared
+        if "drho_a +=" in code:
+            assert "drho" in declared
+
+
+# --- the engine and the runner name no model --------------------------------------------------
+#: registered names that are also ordinary words of the engine's own vocabulary
+_GENERIC = {"lines", "none"}
+#: attributes that belong to one family or model (read through hooks, never by the engine)
+_FAMILY_ATTRS = ("coeffs.noSlip", ".noSlip ", "no_slip", ".every", "wall_density_evolves", "advects_positions", ".ghosts",
+                 "aux[0]", "aux[1]", "filter_pair", "gradient_code", "eos.B", "coeffs.gamma",
+                 "coeffs.hdx", "maker.name", "prm[2]")
+
+
+def test_engine_and_runner_name_no_model():
+    names = {n for models in registry.families().values() for n in models} - _GENERIC
+    files = sorted((PKG / "engine").glob("*.py")) + [PKG / "runner.py"]
+    found = []
+    for f in files:
+        text = f.read_text()
+        for n in names:
+            if re.search(rf"\b{re.escape(n)}\b", text):
+                found.append(f"{f.name}: {n}")
+        for attr in _FAMILY_ATTRS:
+            if attr in text:
+                found.append(f"{f.name}: {attr}")
+    assert not found, found
+
+
+def test_generated_loops_follow_the_neighbour_kinds():
+    """A repulsive wall enters only the viscous (no-slip) and force terms; a free-slip one
+    only the force; stationary ghosts enter everything (no branch at all)."""
+    ghosts = source(selection())
+    rep = source(selection(boundary={"type": "repulsiveMonaghanKos"}))
+    slip = source(selection(boundary={"type": "repulsiveMonaghanKos", "noSlip": False}))
+    rates = lambda s: s[s.index("def rates"):s.index("def density_rate")]  # noqa: E731
+    assert "kindb ==" not in rates(ghosts)
+    r = rates(rep)
+    assert "if kindb == FLUID:" in r and "else:" in r
+    wall_part = r[r.index("else:", r.index("if kindb == FLUID:")):]
+    assert "pi_ab" in wall_part.split("s_ab")[0]           # viscosity at a no-slip wall
+    s = rates(slip)
+    wall_part = s[s.index("else:", s.index("if kindb == FLUID:")):]
+    assert "pi_ab" not in wall_part.split("s_ab")[0]
+
+
+def test_the_kernel_value_is_computed_only_where_read():
+    plain = source(selection())
+    xsph = source(selection(velocityCorrection={"type": "xsph"}))
+    assert "Wab" not in plain
+    pre = xsph[xsph.index("def prepass"):xsph.index("def rates")]
+    assert "Wab = kern_w" in pre
+    assert "Wab" not in xsph[xsph.index("def rates"):]
+
+
+def test_the_old_csph_word_still_selects_csph():
+    assert registry.get("kernelCorrection", "cspH") is registry.get("kernelCorrection", "csph")
+    assert "csph" in registry.names("kernelCorrection")
+    assert "cspH" not in registry.names("kernelCorrection")
+
+
+# --- one schedule ---------------------------------------------------------------------------
+def test_schedule_is_a_function_of_step_and_time():
+    ts = Schedule("timeStep", 20)
+    assert [i for i in range(1, 61) if ts.due(i, 0.0, 0.0)] == [20, 40, 60]
+    rt = Schedule("runTime", 0.05)
+    times = np.linspace(0.0, 0.2, 41)
+    due = [round(t, 6) for t0, t in zip(times[:-1], times[1:]) if rt.due(0, t, t0)]
+    assert due == [0.05, 0.1, 0.15, 0.2]
+    assert Schedule("writeTime").due(3, 1.0, 0.9, wrote=True)
+    assert not Schedule("writeTime").due(3, 1.0, 0.9, wrote=False)
+    assert rt.next_time(0.05) == pytest.approx(0.1) and rt.next_time(0.07) == pytest.approx(0.1)
+    f = Schedule.every(3)
+    assert [i for i in range(10) if f.due_before_step(i)] == [3, 6, 9]
+    with pytest.raises(ValueError, match="interval"):
+        Schedule("runTime", float("inf"))
+
+
+def test_function_objects_sample_the_same_after_a_restart(tutorial):
+    """The same sampled times and the same values, restarted half way or not (a timeStep
+    and a runTime function object)."""
+    from sphfoam.runner import run_case
+
+    common = {"type": "damBreakFront", "wallX": 0.0, "H0": 0.25, "plot": False}
+    fos = {"front": {**common, "writeControl": "timeStep", "writeInterval": 7},
+           "frontT": {**common, "writeControl": "runTime", "writeInterval": 0.0013}}
+    edits = {"system/particleDict:dx": 0.0125, "system/controlDict:endTime": 0.02,
+             "system/controlDict:writeInterval": 0.01, "system/controlDict:functions": fos}
+    def rows(case, name):
+        out = {}
+        for folder in sorted((case / "postProcessing" / name).iterdir()):
+            data = np.loadtxt(folder / f"{name}.dat", ndmin=2)
+            for r in data:
+                out[float(r[0])] = tuple(r[1:])
+        return out
+
+    full = tutorial("damBreak", edits)
+    run_case(full, progress=False, echo=None)
+    uninterrupted = {name: rows(full, name) for name in fos}
+    part = tutorial("damBreak", {**edits, "system/controlDict:endTime": 0.01})  # replaces it
+    run_case(part, progress=False, echo=None)
+    from sphfoam.case.edit import set_entry
+
+    set_entry(part, "system/controlDict", "endTime", 0.02)
+    run_case(part, progress=False, echo=None)
+    for name in fos:
+        a, b = uninterrupted[name], rows(part, name)
+        assert len(a) > 3, name
+        assert sorted(a) == sorted(b), name
+        assert all(np.array_equal(a[t], b[t], equal_nan=True) for t in a), name
+
+
+# --- packages without circles -----------------------------------------------------------------
+def _imports(path: Path) -> set[str]:
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            out.add(node.module)
+            out |= {f"{node.module}.{a.name}" for a in node.names}
+    return {n for n in out if n.startswith("sphfoam.")}
+
+
+def test_package_import_graph_has_no_cycle():
+    """Subpackages and top-level modules of sphfoam, every import counted (function-level
+    ones too): the graph is acyclic."""
+    def unit(mod: str) -> str:
+        return ".".join(mod.split(".")[:2])
+
+    graph: dict[str, set[str]] = {}
+    for f in PKG.rglob("*.py"):
+        rel = f.relative_to(PKG.parent).with_suffix("")
+        mod = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+        for dep in _imports(f):
+            u, v = unit(mod), unit(dep)
+            if u != v and v in {unit(m) for m in _all_units()}:
+                graph.setdefault(u, set()).add(v)
+    state: dict[str, int] = {}
+
+    def visit(n, path):
+        state[n] = 1
+        for m in graph.get(n, ()):
+            if state.get(m) == 1:
+                raise AssertionError("import cycle: " + " -> ".join(path + [n, m]))
+            if m not in state:
+                visit(m, path + [n])
+        state[n] = 2
+
+    for n in list(graph):
+        if n not in state:
+            visit(n, [])
+
+
+def _all_units():
+    for f in PKG.rglob("*.py"):
+        rel = f.relative_to(PKG.parent).with_suffix("")
+        yield ".".join(rel.parts[:2]) if len(rel.parts) > 1 else rel.parts[0]
