@@ -114,19 +114,12 @@ def make_context(dx):
     return CaseContext(dx=dx, h=HDX * dx, rho0=RHO0, nu=1e-6, g=(0.0, -G), fluid_height=H)
 
 
-def core_params(sel, dx):
-    h = HDX * dx
-    kappa = sel.kernel.support
-    return dict(h=h, inv_h=1.0 / h, support2=(kappa * h) ** 2, eta2=0.01 * h * h,
-                gx=0.0, gy=-G)
-
-
 def build(dx):
     from sphfoam.engine.codegen import build_pipeline
 
     sel = build_selection()
     ctx = make_context(dx)
-    return sel, ctx, build_pipeline(sel, ctx, core_params(sel, dx))
+    return sel, ctx, build_pipeline(sel, ctx)
 
 
 def make_sim(total: int):
@@ -149,7 +142,7 @@ def make_sim(total: int):
     lo = (-LAYERS * dx - pad, -LAYERS * dx - pad)
     hi = (TANK_LENGTH * H + LAYERS * dx + pad, 1.25 * TANK_HEIGHT * H + pad)
     integ = registry.build("integrator", dict(INTEGRATOR))
-    sim = Simulation(st, pipe, integ, h=h, support=sel.kernel.support, domain_lo=lo,
+    sim = Simulation(st, pipe, integ, domain_lo=lo,
                      domain_hi=hi, beta=BETA, force_condition=True, adjust_time_step=True,
                      delta_t=1e-4)
     return sim, dict(dx=dx, h=h, n_side=n, n=int(st.n), n_fluid=int(st.n_fluid),
@@ -198,6 +191,10 @@ def _pair_counter():
     return _count_pairs
 
 
+def pipe_support2(sim) -> float:
+    return sim.pipeline.support_radius ** 2
+
+
 def neighbour_stats(sim, check_kdtree=False):
     import numpy as np
 
@@ -207,7 +204,7 @@ def neighbour_stats(sim, check_kdtree=False):
     nb = np.zeros(n, np.int64)
     cand = np.zeros(n, np.int64)
     nbw = np.zeros(n, np.int64)
-    support2 = float(sim.prm[2])
+    support2 = pipe_support2(sim)
     _pair_counter()(st.x, st.y, st.kind, cl.cell_start, cl.x0, cl.y0, 1.0 / cl.cell_size,
                     cl.ncx, cl.ncy, support2, nb, cand, nbw)
     fluid = st.kind == 0

@@ -243,7 +243,7 @@ def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
     """Error metrics of system/metricsDict for the finished run in CASE."""
     import math
 
-    from sphfoam.models.metrics import load_metrics
+    from sphfoam.case.metrics_dict import load_metrics
 
     c = _case(case)
     mset = _guard(load_metrics, c.path)

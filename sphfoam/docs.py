@@ -491,7 +491,8 @@ def models_markdown() -> str:
         if not entries:
             parts += ["_none registered yet_", ""]
             continue
-        rows = [[_code(name), _cell(cls.doc), _cell(_details(cls)), _coeff_lines(cls)]
+        rows = [[_code(name) + "".join(f" (formerly {_code(a)})" for a in cls.aliases),
+                 _cell(cls.doc), _cell(_details(cls)), _coeff_lines(cls)]
                 for name, cls in entries.items()]
         parts += [_table(["type", "description", "details", "coefficients"], rows), ""]
     return "\n".join(parts).rstrip("\n") + "\n"

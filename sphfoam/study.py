@@ -232,7 +232,7 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
                                     f"variant; variants: {', '.join(names)}"))
     if problems:
         raise CaseError(problems)
-    from sphfoam.models.metrics import load_metrics
+    from sphfoam.case.metrics_dict import load_metrics
 
     load_metrics(base, spec.metrics, source=rel)       # bad metrics: one screen, before runs
     dxs = spec.resolutions or [None]
@@ -290,7 +290,7 @@ def run_one(spec: RunSpec) -> dict:
     numba.set_num_threads(max(1, min(spec.threads, numba.config.NUMBA_NUM_THREADS)))
     from sphfoam.case.case import Case
     from sphfoam.engine.health import BlowUp
-    from sphfoam.models.metrics import evaluate_metrics
+    from sphfoam.case.metrics_dict import evaluate_metrics
     from sphfoam.runner import run_case, setup_case
 
     path = Path(spec.path)

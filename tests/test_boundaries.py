@@ -127,9 +127,7 @@ def _wall_pipeline(boundary: dict, g=(0.0, 0.0)):
                  viscosity={"type": "none"}, boundary=boundary)
     sel = Selection(*(registry.build(f, s) for f, s in specs.items()))
     ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=g, fluid_height=0.1, c0=C0)
-    core = dict(h=H, inv_h=1 / H, support2=(sel.kernel.support * H) ** 2, eta2=0.01 * H * H,
-                gx=g[0], gy=g[1])
-    return build_pipeline(sel, ctx, core)
+    return build_pipeline(sel, ctx)
 
 
 def _acceleration(pipe, xa, ya, ua=0.0, va=0.0, corner_at=None):

@@ -64,10 +64,7 @@ CTX = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=(0.0, 0.0), fluid_height=0.3
 
 
 def _build(sel):
-    support = sel.kernel.support
-    core = dict(h=H, inv_h=1.0 / H, support2=(support * H) ** 2, eta2=0.01 * H * H,
-                gx=0.0, gy=0.0)
-    return build_pipeline(sel, CTX, core)
+    return build_pipeline(sel, CTX)
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from pydantic import Field
 from scipy.integrate import trapezoid
 
 from sphfoam import registry
-from sphfoam.engine.terms import LOOP_STAGES, Term
+from sphfoam.engine.terms import Term
 from sphfoam.models.kernels import Kernel
 from sphfoam.models.viscosity import VISCOUS_SEES, Viscosity
 from sphfoam.registry import Coeffs, register

@@ -73,9 +73,7 @@ class Setup:
         self.g = g
         self.ctx = CaseContext(dx=DX, h=h, rho0=RHO0, nu=NU, g=g, fluid_height=0.0)
         self.eta2 = 0.01 * h * h
-        core = dict(h=h, inv_h=1.0 / h, support2=(self.support * h) ** 2, eta2=self.eta2,
-                    gx=g[0], gy=g[1])
-        self.pipe = build_pipeline(self.sel, self.ctx, core)
+        self.pipe = build_pipeline(self.sel, self.ctx)
         self.B = self.sel.equationOfState.B(self.ctx)
         self.gamma = self.sel.equationOfState.coeffs.gamma
 

@@ -65,9 +65,7 @@ class Setup:
         self.h = HDX * DX
         self.ctx = CaseContext(dx=DX, h=self.h, rho0=RHO0, nu=1e-6, g=(0.0, 0.0),
                                fluid_height=0.0, c0=C0)
-        core = dict(h=self.h, inv_h=1.0 / self.h, support2=(self.kernel.support * self.h) ** 2,
-                    eta2=0.01 * self.h ** 2, gx=0.0, gy=0.0)
-        self.pipe = build_pipeline(self.sel, self.ctx, core)
+        self.pipe = build_pipeline(self.sel, self.ctx)
 
     def simulation(self, rho, m=None, u=None) -> Simulation:
         x, y = lattice()

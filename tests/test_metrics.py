@@ -16,7 +16,7 @@ from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError
 from sphfoam.cli import app
 from sphfoam.engine.state import FLUID
-from sphfoam.models.metrics import MetricValue, evaluate_metrics, load_metrics, relative_error
+from sphfoam.case.metrics_dict import MetricValue, evaluate_metrics, load_metrics, relative_error
 from sphfoam.sampling import channel_theory as ct
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"

@@ -26,9 +26,7 @@ def box():
     sel = Selection(**models, periodic_x=True, periodic_y=True)
     ctx = CaseContext(dx=DX, h=H, rho0=1000.0, nu=1e-6, g=(0.0, 0.0), fluid_height=L, c0=10.0)
     kappa = models["kernel"].support
-    core = dict(h=H, inv_h=1 / H, support2=(kappa * H) ** 2, eta2=0.01 * H * H, gx=0.0, gy=0.0,
-                lx=L, ly=L)
-    return sel, ctx, build_pipeline(sel, ctx, core), kappa
+    return sel, ctx, build_pipeline(sel, ctx, domain_hi=(L, L)), kappa
 
 
 def make_sim(box, seed=0):
@@ -117,9 +115,7 @@ def test_density_only_pass_carries_every_drho_term():
                     periodic_x=True, periodic_y=True)
     ctx = CaseContext(dx=DX, h=H, rho0=1000.0, nu=1e-6, g=(0.0, 0.0), fluid_height=L, c0=10.0)
     kappa = models["kernel"].support
-    core = dict(h=H, inv_h=1 / H, support2=(kappa * H) ** 2, eta2=0.01 * H * H, gx=0.0, gy=0.0,
-                lx=L, ly=L)
-    sim = make_sim((sel, ctx, build_pipeline(sel, ctx, core), kappa), seed=2)
+    sim = make_sim((sel, ctx, build_pipeline(sel, ctx, domain_hi=(L, L)), kappa), seed=2)
     sim.neighbour_update()
     sim.eos()
     sim.rates()

@@ -65,9 +65,7 @@ class Setup:
     def __init__(self, key: str):
         self.sel = selection(key)
         self.support = self.sel.kernel.support
-        core = dict(h=H, inv_h=1.0 / H, support2=(self.support * H) ** 2, eta2=0.01 * H * H,
-                    gx=0.0, gy=0.0)
-        self.pipe = build_pipeline(self.sel, CTX, core)
+        self.pipe = build_pipeline(self.sel, CTX)
 
     def rates(self, x, y, u, v, m=None, rho=None):
         """Simulation with the rates evaluated (state sorted by cell; aux of the last pass)."""

@@ -116,7 +116,7 @@ class Case:
         props = self._validated("waveProperties")
         out, problems = {}, []
         for name, w in props.waves.items():
-            mdl = self._build("waveTheory", {"type": w.theory}, rel, f"waves.{name}.theory",
+            mdl = build_model("waveTheory", {"type": w.theory}, rel, f"waves.{name}.theory",
                               problems)
             if mdl is not None:
                 out[name] = (w, mdl)
@@ -144,14 +144,14 @@ class Case:
                                         f"required; choose a type from: "
                                         f"{', '.join(registry.names(family))}"))
                 continue
-            mdl = self._build(family, spec, SPH_PROPERTIES, family, problems)
+            mdl = build_model(family, spec, SPH_PROPERTIES, family, problems)
             if mdl is not None:
                 sph[family] = mdl
-        integ = self._build("integrator", self.schemes.integrator.model_dump(),
+        integ = build_model("integrator", self.schemes.integrator.model_dump(),
                             FILES["sphSchemes"][0], "integrator", problems)
         functions = {}
         for name, spec in self.control.functions.items():
-            fo = self._build("functionObject", spec, FILES["controlDict"][0],
+            fo = build_model("functionObject", spec, FILES["controlDict"][0],
                              f"functions.{name}", problems)
             if fo is not None:
                 fo.object_name = name
@@ -166,7 +166,7 @@ class Case:
         for i, (name, wall) in enumerate(walls.items()):
             if wall.motion is None:
                 continue
-            mot = self._build("motion", wall.motion, pd_file, f"walls.{name}.motion", problems)
+            mot = build_model("motion", wall.motion, pd_file, f"walls.{name}.motion", problems)
             if mot is None:
                 continue
             try:
@@ -178,21 +178,6 @@ class Case:
         if problems:
             raise CaseError(problems)
         return Models(sph, integ, functions, motions)
-
-    @staticmethod
-    def _build(family, spec, file, key, problems):
-        if not isinstance(spec, dict) or "type" not in spec:
-            problems.append(Problem(file, key, f"expected a sub-dictionary with a 'type' entry; "
-                                    f"registered: {', '.join(registry.names(family))}"))
-            return None
-        try:
-            return registry.build(family, spec)
-        except registry.UnknownModel as e:
-            problems.append(Problem(file, f"{key}.type", str(e)))
-        except ValidationError as e:
-            cls = registry.get(family, str(spec["type"]))
-            problems.extend(from_validation(e, file, cls.Coeffs, prefix=key).problems)
-        return None
 
     # --- derived -------------------------------------------------------------------------
     @cached_property
@@ -225,3 +210,21 @@ class Case:
         if not math.isfinite(self.context.c0) or self.context.c0 <= 0:
             raise CaseError.single(SPH_PROPERTIES, "equationOfState",
                                    "speed of sound is not positive; set vmax or speedOfSound")
+
+
+def build_model(family, spec, file, key, problems):
+    """Build ``spec`` (``{type name; coeffs}``) of ``family`` from ``file`` at ``key``; problems
+    (not a sub-dictionary, unknown type, bad coefficients) are appended to ``problems`` and
+    give None."""
+    if not isinstance(spec, dict) or "type" not in spec:
+        problems.append(Problem(file, key, f"expected a sub-dictionary with a 'type' entry; "
+                                f"registered: {', '.join(registry.names(family))}"))
+        return None
+    try:
+        return registry.build(family, spec)
+    except registry.UnknownModel as e:
+        problems.append(Problem(file, f"{key}.type", str(e)))
+    except ValidationError as e:
+        cls = registry.get(family, str(spec["type"]))
+        problems.extend(from_validation(e, file, cls.Coeffs, prefix=key).problems)
+    return None

@@ -7,7 +7,6 @@ import numpy as np
 #: particle kinds (the ``type`` field of a time directory); ghosts (mirrored across walls
 #: each step, T(3.77)) live only inside a step and are never written
 FLUID, WALL, GHOST = 0, 1, 2
-KIND_NAMES = {FLUID: "fluid", WALL: "wall", GHOST: "ghost"}
 
 #: persistent arrays (permuted when particles are re-sorted, written to time directories)
 PERSISTENT_F8 = ("x", "y", "u", "v", "rho", "m")

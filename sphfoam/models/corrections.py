@@ -50,7 +50,7 @@ class XSPH(VelocityCorrection):
     for m_b; both are misprints of this form).  Wall particles get dv = 0: they keep their
     prescribed velocity.
 
-    The corrected velocity v_a + dv_a moves the particles (``advects_positions``) and enters
+    The corrected velocity v_a + dv_a moves the particles (the ``advection_velocity`` hook) and enters
     the continuity equation, uc_ab = v_ab + dv_a - dv_b (T §3.6, "for consistency"); the
     momentum equation uses the uncorrected v, so linear and angular momentum are unaffected.
     Since m_a m_b / rhobar_ab W_ab is symmetric in a and b, sum_a m_a dv_a = 0 over the fluid
@@ -135,7 +135,7 @@ class CSPH(KernelCorrection):
 
     The pre-pass accumulates M (in coordinates scaled by h, so that its entries are O(1)),
     inverts it by cofactors and stores the six entries of B as ``csph_b11`` ... ``csph_b33``
-    and a flag ``csph_ok``; ``gradient_code`` replaces grad_a W_ab in the continuity, pressure
+    and a flag ``csph_ok``; the ``correctedGradient`` term corrects grad_a W_ab in the continuity, pressure
     and viscous terms of the rates and density loops (P: "used to replace respective standard
     SPH counterparts in the equations of continuity and motion").  The paper does not
     symmetrise: grad_a W~_ab uses the coefficients of a only, so momentum is no longer
@@ -145,8 +145,8 @@ class CSPH(KernelCorrection):
     of the continuity equation and the discrete gradient of the momentum equation are no
     longer adjoint, and at a free surface the linearised acoustic operator has eigenvalues
     with a positive real part of the order of c0 / h (1.4 c0 / h for a free 12 x 12 block
-    with Wendland C2, h = 1.3 dx; 0.9 c0 / h with the Gaussian, h = 1.33 dx).  The damBreak
-    tutorial (dx = 12.5 mm) blows up from its free surface within 0.02 s this way: alone
+    with Wendland C2, h = 1.3 dx; 0.9 c0 / h with the Gaussian, h = 1.33 dx).  A dam break of
+    the damBreak tutorial's layout at dx = 12.5 mm blows up from its free surface within 0.02 s this way: alone
     (0.006 s), with XSPH, with delta-SPH, with an MLS re-initialisation every 20 steps, and
     in P's own set-up (Gaussian, h = 1.33 dx, XSPH, a Shepard filter every 20 steps; 0.017 s).
     ``symmetric yes`` uses the antisymmetric (grad~_a W_ab - grad~_b W_ba) / 2 instead

@@ -21,7 +21,6 @@ from __future__ import annotations
 import abc
 import math
 import re
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, Literal, NoReturn
 
@@ -29,72 +28,11 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from sphfoam import registry
-from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
-from sphfoam.case.schemas import MetricsDict
+from sphfoam.case.errors import CaseError, did_you_mean, from_validation
+from sphfoam.case.metrics_dict import CONTROL_DICT, METRICS_DICT, MetricValue, relative_error
+from sphfoam.io.tables import read_table, start_folders
 from sphfoam.registry import Coeffs, Model, register
 
-METRICS_DICT = "system/metricsDict"
-CONTROL_DICT = "system/controlDict"
-
-
-@dataclass
-class MetricValue:
-    """One evaluated metric. ``error`` is (value - reference)/reference in %, None without a
-    reference, NaN when it cannot be formed; ``problem`` says why ``value`` is NaN when the
-    metric failed under ``evaluate_metrics(..., strict=False)``."""
-
-    value: float
-    reference: float | None
-    error: float | None
-    unit: str
-    problem: str | None = None
-
-
-def relative_error(value: float, reference: float | None) -> float | None:
-    """Signed relative error in %, (value - reference)/reference 100; None without a
-    reference, NaN when either is not finite or the reference is 0."""
-    if reference is None:
-        return None
-    v, r = float(value), float(reference)
-    if not (math.isfinite(v) and math.isfinite(r)) or r == 0.0:
-        return float("nan")
-    return 100.0 * (v - r) / r
-
-
-# --- reading function-object output --------------------------------------------------------
-def read_table(path: Path) -> tuple[list[str], np.ndarray]:
-    """(columns, rows) of a function-object file: ``#`` header lines, the last naming the
-    tab-separated columns; rows of another length (a line cut short) are skipped."""
-    cols: list[str] = []
-    rows: list[list[float]] = []
-    for line in Path(path).read_text().splitlines():
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            cols = [c.strip() for c in s[1:].strip().split("\t")]
-            continue
-        try:
-            rows.append([float(v) for v in s.split()])
-        except ValueError:
-            continue
-    rows = [r for r in rows if len(r) == len(cols)]
-    return cols, np.array(rows, dtype=float).reshape(len(rows), len(cols))
-
-
-def start_folders(case_path: Path, function: str) -> list[tuple[float, Path]]:
-    """(start time, folder) of ``postProcessing/<function>/<startTime>/``, oldest first."""
-    root = Path(case_path) / "postProcessing" / function
-    out = []
-    if root.is_dir():
-        for p in root.iterdir():
-            try:
-                t = float(p.name)
-            except ValueError:
-                continue
-            if p.is_dir():
-                out.append((t, p))
-    return sorted(out, key=lambda tp: tp[0])
 
 
 def _label(v: float) -> str:
@@ -616,96 +554,3 @@ class SurgeFront(Metric):
         zm = self.martin_moyce()
         return MetricValue(float(z.mean()), float(zm.mean()),
                            float(np.mean(100.0 * (z - zm) / zm)), self.unit)
-
-
-# --- metricsDict -------------------------------------------------------------------------------
-@dataclass
-class MetricSet:
-    """The metrics of a case (or of a study's own spec), built and validated."""
-
-    metrics: dict[str, Metric]
-    pareto: str | None
-    source: str = METRICS_DICT
-
-    def check(self, case_path) -> None:
-        """Check every metric against the function objects of the case's system/controlDict
-        (before a run: nothing is read from postProcessing)."""
-        from sphfoam.case.case import Case
-
-        functions = Case(case_path).read_dict(CONTROL_DICT).get("functions") or {}
-        problems: list[Problem] = []
-        for m in self.metrics.values():
-            try:
-                m.check(functions)
-            except CaseError as e:
-                problems.extend(e.problems)
-        if problems:
-            raise CaseError(problems)
-
-    def evaluate(self, case_path, strict: bool = True) -> dict[str, MetricValue]:
-        """Every metric of the run in ``case_path``. ``strict``: one CaseError listing every
-        metric that cannot be evaluated; otherwise those are NaN with their ``problem``."""
-        out, problems = {}, []
-        for name, m in self.metrics.items():
-            try:
-                out[name] = m.evaluate(case_path)
-            except CaseError as e:
-                problems.extend(e.problems)
-                ref = m.known_reference()
-                out[name] = MetricValue(float("nan"), ref, None if ref is None else float("nan"),
-                                        m.unit, "; ".join(str(p) for p in e.problems))
-        if strict and problems:
-            raise CaseError(problems)
-        return out
-
-
-def _spec_of(spec: dict) -> dict:
-    """A metrics spec given as the whole dictionary ({metrics {...}; pareto ...}) or as the
-    ``metrics`` mapping alone (as a studyDict writes it)."""
-    inner = spec.get("metrics")
-    if isinstance(inner, dict) and "type" not in inner:
-        return dict(spec)
-    return {"metrics": dict(spec)}
-
-
-def load_metrics(case_path=None, spec: dict | None = None, *, source: str | None = None
-                 ) -> MetricSet:
-    """Build the metrics of ``spec`` or else of ``case_path``/system/metricsDict; errors (unknown
-    type, bad keys, unknown pareto) are one CaseError naming ``source`` and the key path."""
-    from sphfoam.case.case import Case
-
-    if spec is None:
-        source = source or METRICS_DICT
-        raw = Case(case_path).read_dict(METRICS_DICT)
-    else:
-        source = source or "metrics spec"
-        raw = _spec_of(spec)
-    problems: list[Problem] = []
-    try:
-        md = MetricsDict.model_validate(raw)
-        entries, pareto = md.metrics, md.pareto
-    except ValidationError as e:                 # report the entries' problems too
-        problems.extend(from_validation(e, source, MetricsDict).problems)
-        entries, pareto = raw.get("metrics"), None
-        entries = entries if isinstance(entries, dict) else {}
-    metrics: dict[str, Metric] = {}
-    for name, entry in entries.items():
-        m = Case._build("metric", entry, source, f"metrics.{name}", problems)
-        if m is not None:
-            m.entry, m.source = name, source
-            metrics[name] = m
-    if problems:
-        raise CaseError(problems)
-    return MetricSet(metrics, pareto, source)
-
-
-def evaluate_metrics(case_path, spec: dict | None = None, strict: bool = True, *,
-                     source: str | None = None) -> dict[str, MetricValue]:
-    """Metrics of the finished run in ``case_path``: those of ``spec`` (a study's own, the
-    ``metrics`` mapping or a whole metricsDict) or else of its system/metricsDict.
-
-    A bad metrics spec always raises a CaseError. A metric that cannot be evaluated (output
-    missing, gauge absent, wave not arrived) raises with ``strict``; with ``strict=False`` it
-    comes back as NaN with the reason in ``MetricValue.problem``.
-    """
-    return load_metrics(case_path, spec, source=source).evaluate(case_path, strict=strict)
