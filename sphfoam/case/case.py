@@ -70,8 +70,7 @@ class Case:
                 return {}
             raise CaseError.single(rel, "", f"file not found in case {self.path}")
         try:
-            return _strip_header(foamdict.parse(f.read_text(), filename=rel,
-                                                include_dir=f.parent))
+            return _strip_header(foamdict.read(f, filename=rel, case_dir=self.path))
         except foamdict.FoamDictError as e:
             raise CaseError([Problem(rel, "", f"syntax error: {e}")]) from None
 
