@@ -403,8 +403,7 @@ _LIST_TYPES = {"List<scalar>": ("f", 1), "List<label>": ("i", 1), "List<vector>"
                "List<vector2D>": ("f", 2), "List<symmTensor>": ("f", 6),
                "List<tensor>": ("f", 9), "List<sphericalTensor>": ("f", 1)}
 _LIST_HEAD_RE = re.compile(r'\s*([0-9]+)\s*\(')
-_TUPLES_RE = re.compile(r'(?:\s*\([^()/"]*\))*\s*\)')
-_FLAT_RE = re.compile(r'[^()/"{};]*\)')
+_CLOSE2_RE = re.compile(r'\)\s*\)')
 
 #: Directives that would compile or run code in OpenFOAM.
 _CODE_DIRECTIVES = frozenset({"#calc", "#codeStream", "#eval", "#code", "#negate"})
@@ -425,15 +424,21 @@ def _array(text: str, start: int, word: str):
         return None
     kind, ncomp = _LIST_TYPES[word]
     body = m.end()
-    close = (_FLAT_RE if ncomp == 1 else _TUPLES_RE).match(text, body)
-    if close is None:
+    # The list ends at the first ')' (scalars) or ')' ')' (tuples); parse_numbers checks
+    # that everything before it is numbers, grouped in tuples of ncomp.
+    if ncomp == 1:
+        close = text.find(")", body)
+    else:
+        m = _CLOSE2_RE.search(text, body)
+        close = m.end() - 1 if m else -1
+    if close < 0:
         return None
     from sphfoam.io.asciinum import parse_numbers
 
-    values = parse_numbers(text[body:close.end() - 1], n * ncomp, ncomp, integer=kind == "i")
+    values = parse_numbers(text[body:close], n * ncomp, ncomp, integer=kind == "i")
     if values is None:
         return None  # not a plain number list: the general parser reads it (or says why)
-    return values, close.end()
+    return values, close + 1
 
 
 def _tokenize(text: str, error, show) -> list[tuple]:
@@ -960,6 +965,8 @@ def _scalar(v) -> str:
             raise ValueError(f"{v!r} is not a valid word; use QuotedString to write it quoted")
         return v
     if isinstance(v, DimensionSet):
+        if v.units is not None:
+            return "[" + v.units + "]"
         return "[" + " ".join(_number(x) for x in v) + "]"
     if isinstance(v, bool):
         return "true" if v else "false"

@@ -4,13 +4,16 @@ bodies and ascii particle fields) straight into numpy arrays.
 One numba pass over the bytes parses every number. A decimal ``d1...dn x 10^e`` whose
 digits fit in 2^53 and with ``|e| <= 22`` is converted exactly (both factors are exact
 doubles, so one IEEE multiplication or division rounds correctly: Clinger 1990, "How to
-read floating point numbers accurately"); any other number (more than 15-16 significant
-digits, huge exponents) is handed to Python's correctly rounded ``float``. The result is
+read floating point numbers accurately"); one with up to 18 digits is formed in
+double-double arithmetic (Dekker 1971) and rounded, unless it lies too close to a
+rounding midpoint to tell; any other number (and those) is handed to Python's correctly
+rounded ``float``. The result is
 therefore bit-for-bit what ``float(token)`` gives for every token.
 """
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
@@ -22,8 +25,58 @@ _POW10 = np.array([10.0 ** k for k in range(23)])  # 1e0 .. 1e22, all exact doub
 _TOKEN_END = re.compile(rb"[^\s()]*")
 
 
+_SPLIT = 134217729.0  # 2^27 + 1 (Veltkamp/Dekker splitting)
+
+
+@njit(cache=True)
+def _two_prod(a, b):
+    """(p, e) with p = fl(a b) and p + e = a b exactly (Dekker 1971)."""
+    p = a * b
+    t = _SPLIT * a
+    ah = t - (t - a)
+    al = a - ah
+    t = _SPLIT * b
+    bh = t - (t - b)
+    bl = b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+@njit(cache=True)
+def _wide(mant, exp10, pow10, res):
+    """``mant x 10^exp10`` for a 54-63 bit ``mant`` and ``|exp10| <= 22``, correctly
+    rounded into ``res[0]``: the value is formed in double-double arithmetic (relative
+    error below 2^-100) and rounded to nearest; False (leave it to Python) when it lies
+    too close to a rounding midpoint to decide, or at a binade boundary."""
+    a = float(mant >> 32) * 4294967296.0  # exact
+    b = float(mant & 0xFFFFFFFF)  # exact
+    s = a + b
+    err = b - (s - a)  # a >= b: s + err = mant exactly (fast two-sum)
+    big = pow10[exp10 if exp10 >= 0 else -exp10]
+    if exp10 >= 0:
+        p, pe = _two_prod(s, big)
+        lo = pe + err * big
+        hi = p
+    else:
+        q = s / big
+        pp, pe = _two_prod(q, big)
+        r = ((s - pp) - pe) + err  # s - pp is exact (Sterbenz)
+        hi = q
+        lo = r / big
+    x = hi + lo
+    t = lo - (x - hi)  # x + t = hi + lo
+    m, e = math.frexp(x)
+    ulp = math.ldexp(1.0, e - 53)
+    if m == 0.5 and t < 0.0:
+        return False
+    if abs(abs(t) - 0.5 * ulp) <= ulp * 1e-9:
+        return False
+    res[0] = x
+    return True
+
+
 @njit(cache=True)
 def _scan(buf, ncomp, integer, out, iout, fallback, fbslot, pow10):
+    wide = np.empty(1)
     """Parse ``buf`` (uint8) into ``out`` (float64) or ``iout`` (int64, ``integer``).
 
     With ``ncomp > 1`` the numbers must come in ``(a b ...)`` groups of ``ncomp``; with
@@ -67,13 +120,13 @@ def _scan(buf, ncomp, integer, out, iout, fallback, fbslot, pow10):
             neg = c == 45
             i += 1
         mant = 0
-        ndig = 0  # significant digits kept in mant
+        ndig = 0  # significant digits kept in mant (18 fit in int64)
         nd = 0  # digits seen
         exp10 = 0
         overflow = False
         while i < n and 48 <= buf[i] <= 57:
             nd += 1
-            if ndig < 19:
+            if ndig < 18:
                 if mant != 0 or buf[i] != 48:
                     ndig += 1
                 mant = mant * 10 + (buf[i] - 48)
@@ -86,7 +139,7 @@ def _scan(buf, ncomp, integer, out, iout, fallback, fbslot, pow10):
             i += 1
             while i < n and 48 <= buf[i] <= 57:
                 nd += 1
-                if ndig < 19:
+                if ndig < 18:
                     if mant != 0 or buf[i] != 48:
                         ndig += 1
                     mant = mant * 10 + (buf[i] - 48)
@@ -133,6 +186,8 @@ def _scan(buf, ncomp, integer, out, iout, fallback, fbslot, pow10):
             else:
                 v = v / pow10[-exp10]
             out[count] = -v if neg else v
+        elif not overflow and -22 <= exp10 <= 22 and _wide(mant, exp10, pow10, wide):
+            out[count] = -wide[0] if neg else wide[0]
         else:
             fallback[nfb] = start
             fbslot[nfb] = count

@@ -33,6 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
+from sphfoam.io.asciinum import parse_numbers
+
 __all__ = ["write_field", "read_field", "write_state", "read_state", "has_particles", "CLOUD_DIR"]
 
 #: Sub-path of a time directory holding the particle fields.
@@ -136,7 +138,10 @@ def _parse_header(buf: bytes, path: Path) -> tuple[dict[str, str], int]:
         m = _ENTRY.match(buf, i)
         if m is None:
             raise ValueError(f"{path}: malformed FoamFile header near byte {i}")
-        header[m[1].decode()] = m[2].decode().strip().strip('"')
+        try:
+            header[m[1].decode()] = m[2].decode().strip().strip('"')
+        except UnicodeDecodeError:
+            raise ValueError(f"{path}: FoamFile header is not UTF-8 text (near byte {i})") from None
         i = m.end()
 
 
@@ -195,6 +200,9 @@ def read_field(path: str | Path) -> np.ndarray:
     end = buf.rfind(b")")
     if end <= i:
         raise ValueError(f"{path}: unterminated list")
+    fast = parse_numbers(buf[i + 1 : end], n * ncomp, ncomp, integer=kind == "label")
+    if fast is not None:  # one compiled pass, exact (sphfoam.io.asciinum)
+        return fast
     tokens = buf[i + 1 : end].translate(_PARENS).split()
     if len(tokens) != n * ncomp:
         raise ValueError(f"{path}: expected {n * ncomp} values, found {len(tokens)}")
