@@ -523,3 +523,11 @@ def test_parse_numbers_midpoints_and_rejects():
     assert parse_numbers(b"(1 2)\n(3 4)", 4, 2).tolist() == [[1.0, 2.0], [3.0, 4.0]]
     assert parse_numbers("-5 99999999999999999999999", 2, integer=True) is None  # > int64
     assert parse_numbers("-5 9223372036854775807", 2, integer=True).tolist() == [-5, 2**63 - 1]
+
+
+def test_array_path_follows_the_count_rule():
+    # a count after a space on the same line is an ordinary item, for long lists too
+    d = parse("a List<scalar> 150 (" + "1 " * 150 + ");")
+    assert d["a"][1] == 150 and isinstance(d["a"][2], list)
+    d = parse("a List<scalar> 150\n  (" + "1 " * 150 + ");")
+    assert isinstance(d["a"][1], np.ndarray) and d["a"][1].shape == (150,)

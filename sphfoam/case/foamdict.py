@@ -402,7 +402,8 @@ _WS_RE = re.compile(r'\s*')
 _LIST_TYPES = {"List<scalar>": ("f", 1), "List<label>": ("i", 1), "List<vector>": ("f", 3),
                "List<vector2D>": ("f", 2), "List<symmTensor>": ("f", 6),
                "List<tensor>": ("f", 9), "List<sphericalTensor>": ("f", 1)}
-_LIST_HEAD_RE = re.compile(r'\s*([0-9]+)\s*\(')
+# the count, then '(' right after it or on a later line (as the general reader's counts)
+_LIST_HEAD_RE = re.compile(r'\s*([0-9]+)(?:\(|[ \t]*\n\s*\()')
 _CLOSE2_RE = re.compile(r'\)\s*\)')
 
 #: Directives that would compile or run code in OpenFOAM.
