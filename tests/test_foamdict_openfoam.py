@@ -531,3 +531,15 @@ def test_array_path_follows_the_count_rule():
     assert d["a"][1] == 150 and isinstance(d["a"][2], list)
     d = parse("a List<scalar> 150\n  (" + "1 " * 150 + ");")
     assert isinstance(d["a"][1], np.ndarray) and d["a"][1].shape == (150,)
+
+
+def test_foam_case_in_a_table_file_name(tmp_path):
+    from sphfoam import registry
+
+    (tmp_path / "constant").mkdir()
+    rows = [[0.0, 0.0, 0.0], [1.0, 0.5, 0.0], [2.0, 1.0, 0.0]]
+    np.savetxt(tmp_path / "constant" / "paddle.dat", rows)
+    for name in ("$FOAM_CASE/constant/paddle.dat", "<constant>/paddle.dat"):
+        m = registry.build("motion", {"type": "displacementTable", "file": name})
+        m.resolve(tmp_path)
+        assert m.displacement(1.5) == pytest.approx((0.75, 0.0))
