@@ -1,9 +1,11 @@
-"""Reader and writer for OpenFOAM dictionary files.
+"""Reader and writer for OpenFOAM dictionary files, reading OpenFOAM's syntax as
+OpenFOAM reads it.
 
 The reader runs in linear time: one compiled regular expression splits the
 text into tokens in a single pass, and a recursive-descent parser walks the
 token list with an index. Line and column numbers are only worked out when an
-error is reported.
+error is reported. Long ``List<T>`` bodies skip the tokenizer and are read by one
+compiled pass straight into a numpy array (:mod:`sphfoam.io.asciinum`).
 
 Grammar
 -------
@@ -15,13 +17,22 @@ Grammar
                 | '$' name ';'                  merge a dictionary macro here
                 | directive
                 | ';'                           stray ';' (e.g. after '}'), skipped
-    key        := word | number | "quoted"      (the token's text is the key)
+    key        := word | number | "quoted"      (the token's text is the key;
+                                                 a quoted key is a regular expression)
     item       := number | word | "quoted" | '$' name
                 | [count] '(' (item | '{' entry* '}')* ')'  list
                 | count '{' item '}'            uniform list
                 | '[' number* ']'               dimension set
+                | '[' units ']'                 dimension set in units: [m/s], [kg m^-3]
     directive  := '#include' "file" | '#includeIfPresent' "file"
                 | '#remove' key | '#remove' '(' key* ')' | '#inputMode' word
+                | '#inputSyntax' ('slash' | 'dot')
+
+Words are as in OpenFOAM: anything up to whitespace or one of ``;{}[]"``, and a word
+that does not start like a number also takes *balanced* parentheses with no space
+inside, so ``div(phi,U) Gauss linearUpwind grad(U);`` is the key ``div(phi,U)`` with
+the value ``("Gauss", "linearUpwind", "grad(U)")``, and ``CH2(S)`` is one word. A word
+with a ``(`` left open before a space (``uniform(0 0 0)``) is an error.
 
 A ``count`` is a non-negative integer directly followed by ``(`` or ``{``
 (``3(1 2 3)``, ``4{0.5}``) or followed by ``(`` on a later line (as OpenFOAM
@@ -41,35 +52,72 @@ How values come back from :func:`parse`:
   never converted to bool; ``"text"`` -> :class:`QuotedString` (only ``\\"``
   and ``\\\\`` are unescaped, other backslashes are kept as written);
 * ``( ... )`` -> ``list`` (a ``{ ... }`` inside a list is a ``dict`` item);
-  ``[ ... ]`` -> :class:`DimensionSet`; ``key { ... }`` -> ``dict``.
+  ``[ ... ]`` -> :class:`DimensionSet`; ``key { ... }`` -> ``dict``;
+* a counted ``List<scalar>``, ``List<label>``, ``List<vector>``, ``List<vector2D>``,
+  ``List<tensor>``, ``List<symmTensor>`` or ``List<sphericalTensor>`` of at least
+  :data:`ARRAY_MIN_ITEMS` numbers -> a float64 (int64 for labels) numpy array of shape
+  ``(N,)`` or ``(N, components)``, bit for bit ``float(token)`` of every token;
+  shorter lists, and lists that are not plain numbers, come back as lists.
+
+Dimension sets are seven (or five) numbers, or an expression in units and named
+dimensions: ``[m/s]``, ``[kg m^-3]``, ``[m^2/s]``, ``[(mol/cm^3)^-0.5/s]``,
+``[velocity]`` (see :data:`UNITS` and :data:`DIMENSIONS`; juxtaposition and ``*``
+multiply, ``/`` divides left to right, ``^`` raises to a number). The
+:class:`DimensionSet` holds the exponents, the unit text and the unit's SI ``factor``
+(``[g/cm^3]``: 1000), which the case schemas apply to the value. A dimension set
+followed by a word on a new line (a missing ``;``) is an error on that line.
 
 Entries keep file order. A later scalar entry replaces an earlier one with the
 same key; a later sub-dictionary is merged recursively into an earlier one.
 ``#include`` paths are relative to the directory of the file that includes
 them, and the included entries are merged into the current dictionary.
 
+Keys: a quoted key (``"(U|k|epsilon)"``) is a regular expression. Lookups through
+:func:`lookup` and ``$`` references follow OpenFOAM's order: the exact key first,
+then the quoted keys matching the whole name, the last defined first. ``#remove
+"U.*"`` removes the matching keys.
+
 Macros: ``$x`` or ``${x}`` is replaced by a deep copy of ``x``, looked up in
 the current dictionary (as parsed so far) and then in the enclosing ones.
-``$a.b.c`` looks up ``a`` that way and then goes down through ``b`` and ``c``.
-``$:a.b`` starts at the top level. Leading dots choose where the search starts:
-``$.x`` in the current dictionary, ``$..x`` in its parent, and each extra dot
-one level further up. A multi-token macro value is spliced into the
-surrounding items. A standalone ``$dict;`` entry merges the entries of
-``dict`` into the current dictionary.
+Two scoping syntaxes are read (OpenFOAM's ``#inputSyntax``; by default a name with a
+``/`` or ``!`` is slash syntax, any other dot syntax):
 
-Not supported: ``#includeEtc``, ``#includeFunc``, ``#calc``, ``#codeStream``
-and other directives, verbatim ``#{ ... #}`` blocks, ``$FOAM_CASE`` and other
-environment variables in paths, ``/``-scoped macros (``$a/b``), regex or
-wildcard matching of keys (for lookups and ``#remove``), ``$macro`` as a key,
-unit names inside dimension sets (``[kg m^-1]``), and files whose top level
-is a bare list (polyMesh files).
+* dot: ``$a.b.c`` looks up ``a`` that way and then goes down through ``b`` and ``c``
+  (keys may contain dots: ``$dotted.k.l`` finds ``dotted { "k.l" ...}``); ``$:a.b``
+  starts at the top level; leading dots choose where the search starts: ``$.x`` in the
+  current dictionary, ``$..x`` in its parent, and each extra dot one level further up;
+* slash: ``$a/b`` goes down from ``a``; each leading ``../`` goes up one level
+  (``$../../a/b``); ``$!a/b`` starts at the top level; ``$file!a/b`` looks ``a/b`` up
+  in another dictionary file (a path as for ``#include``). With ``#inputSyntax
+  slash;`` dots are only part of keys (``$U.air`` is the key ``U.air``).
+
+A multi-token macro value is spliced into the surrounding items. A standalone
+``$dict;`` entry merges the entries of ``dict`` into the current dictionary.
+``$FOAM_CASE`` and ``$FOAM_CASENAME``, when no entry has that name, are the case
+directory and its name (as OpenFOAM falls back to the environment).
+
+Paths (``#include``, ``$file!...``): ``$FOAM_CASE``, ``$FOAM_CASENAME``, ``${...}``
+and OpenFOAM's ``<case>``, ``<system>``, ``<constant>`` are expanded (:func:`expand`;
+no other environment variable, no ``~``). A relative path must stay inside the case
+directory (given to :func:`parse`/:func:`read`, else the nearest ancestor holding a
+``system`` directory); an absolute path is taken as named, on purpose. Only regular
+files up to :data:`MAX_FILE_BYTES` are read: directories, devices (``/dev/zero``),
+FIFOs and ``/dev/stdin`` are refused before opening. Error messages about an included
+file name the file and position but never quote its contents.
+
+Refused with a clear error: code (``#calc``, ``#codeStream``, ``#eval``, verbatim
+``#{ ... #}``: sphfoam never compiles or executes code from a dictionary), binary files
+(NUL bytes, or a ``format binary`` header over list data), bytes that are not UTF-8
+(the error names the file, line and column), and the directives sphfoam does not read
+(``#includeEtc``, ``#includeFunc``, ...). Not supported: ``$macro`` as a key, and files
+whose top level is a bare list (polyMesh files).
 
 :func:`dumps` writes text that :func:`parse` reads back equal, with the same
 types. It raises ``ValueError`` for values that have no exact text form: a
 ``str`` that is not a valid bare word (use :class:`QuotedString`), non-finite
 floats, tuples with fewer than two items, tuples inside tuples or lists, and
 ``None`` or ``dict`` inside a tuple. ``True``/``False`` are written as the
-words ``true``/``false``.
+words ``true``/``false``. A dimension set read in units is written in those units.
 """
 
 from __future__ import annotations
