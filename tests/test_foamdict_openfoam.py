@@ -543,3 +543,14 @@ def test_foam_case_in_a_table_file_name(tmp_path):
         m = registry.build("motion", {"type": "displacementTable", "file": name})
         m.resolve(tmp_path)
         assert m.displacement(1.5) == pytest.approx((0.75, 0.0))
+
+
+def test_deep_nesting_and_nul_in_an_include_name_are_clean_errors(tmp_path):
+    for text in ["a " + "(" * 5000 + ";", "a " + "{ b " * 5000, "a " + "[" * 3000]:
+        with pytest.raises(FoamDictError):
+            parse(text)
+    (tmp_path / "deep").write_text("x " + "(" * 150 + ")" * 150 + ";")
+    with pytest.raises(FoamDictError, match="nested more than"):
+        parse("a { " * 100 + '#include "deep"' + " }" * 100, include_dir=tmp_path)
+    with pytest.raises(FoamDictError, match="NUL"):
+        parse('#include "a\x00b"', include_dir=tmp_path)

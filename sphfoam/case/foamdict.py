@@ -326,6 +326,8 @@ def read_text(path, filename: str | None = None) -> str:
         st = os.stat(path)
     except OSError as exc:
         raise FoamDictError(f"cannot read file: {exc.strerror}", name) from None
+    except ValueError:  # a NUL character in the path
+        raise FoamDictError("the file name contains a NUL character", name) from None
     if stat.S_ISDIR(st.st_mode):
         raise FoamDictError("is a directory, not a dictionary file", name)
     if not stat.S_ISREG(st.st_mode):
@@ -546,6 +548,7 @@ def _tokenize(text: str, error, show) -> list[tuple]:
 
 _CLOSE_NAMES = {")": "list", "]": "dimension set", "}": "uniform list"}
 _MAX_INCLUDE_DEPTH = 32
+_MAX_NESTING = 200
 
 
 def _copy(value):
@@ -635,11 +638,19 @@ def _walk(d: dict, parts: list[str]):
 
 class _Parser:
     def __init__(self, text: str, filename: str | None, include_dir: Path, depth: int = 0,
-                 case_dir: Path | None = None, syntax: str = "auto"):
+                 case_dir: Path | None = None, syntax: str = "auto", nesting: int = 0):
         self.text, self.filename, self.include_dir, self.depth = text, filename, include_dir, depth
         self.case_dir, self.syntax = case_dir, syntax
         self.tokens = _tokenize(text, self.error, self.show)
         self.i = 0
+        self.nesting = nesting
+
+    def enter(self, pos) -> None:
+        """Count one more level of nesting (lists, dictionaries) and refuse too many."""
+        self.nesting += 1
+        if self.nesting > _MAX_NESTING:
+            raise self.error(f"lists or dictionaries nested more than {_MAX_NESTING} deep",
+                             pos or 0)
 
     def show(self, s) -> str:
         """``repr(s)`` of text from the file, or a placeholder in an included file (whose
@@ -662,6 +673,7 @@ class _Parser:
         ``scopes`` lists the dictionaries being built, outermost first, ``d`` last.
         """
         tokens = self.tokens
+        self.enter(open_pos)
         while True:
             kind, value, pos, text = tokens[self.i]
             self.i += 1
@@ -698,11 +710,13 @@ class _Parser:
                 for k, v in sub.items():
                     _assign(d, k, v)
             elif kind == "}" and open_pos is not None:
+                self.nesting -= 1
                 return
             elif kind == "eof":
                 if open_pos is not None:
                     raise self.error("unterminated dictionary: missing '}'", open_pos)
                 self.i -= 1
+                self.nesting -= 1
                 return
             else:
                 raise self.error(f"expected a keyword, found {self.show(text)}", pos)
@@ -737,6 +751,7 @@ class _Parser:
         tokens = self.tokens
         out: list = []
         append = out.append
+        self.enter(open_pos)
         dims_line = 0  # line of a dimension set in this entry's value (0: none yet)
         while True:
             kind, value, pos, text = tokens[self.i]
@@ -773,6 +788,7 @@ class _Parser:
             elif kind == "array":
                 append(value)
             elif kind == close:
+                self.nesting -= 1
                 return out
             elif kind == "(":
                 append(self.items(scopes, ")", pos))
@@ -851,7 +867,7 @@ class _Parser:
             if content is None:
                 return
             _Parser(content, str(path), path.parent, self.depth + 1, self.case_dir,
-                    self.syntax).parse_dict(d, scopes)
+                    self.syntax, self.nesting).parse_dict(d, scopes)
         elif name == "#remove":
             keys = []
             if kind == "(":
@@ -920,7 +936,7 @@ class _Parser:
                 path, content = self.read_other(file, pos)
                 other: dict = {}
                 _Parser(content, str(path), path.parent, self.depth + 1, self.case_dir,
-                        self.syntax).parse_dict(other, [other])
+                        self.syntax, self.nesting).parse_dict(other, [other])
                 candidates = [other]
             else:
                 candidates = [scopes[0]]
