@@ -12,7 +12,8 @@ For ``internalField nonuniform List<vector> N (...)`` written with 17 significan
   (the reference "compiled reader"), and ``numpy.loadtxt`` on the same body;
 * ``foamdict.parse`` with the array path switched off (``ARRAY_MIN_ITEMS`` raised), on a
   tenth of the items, scaled by 10: the general token-by-token reader that returns lists;
-* ``sphfoam.io.fields.read_field`` on an ascii ``vectorField`` particle file of the same size.
+* ``sphfoam.io.fields.read_field`` on an ascii ``vector2DField`` particle file of the same
+  size (numpy's own conversion of the split tokens).
 
 It also checks that every array equals ``float(token)`` of every token bit for bit.
 Nothing is written except a temporary field file.

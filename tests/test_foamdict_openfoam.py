@@ -456,7 +456,7 @@ def test_case_reports_bad_bytes_as_a_case_error(tmp_path):
 # ---------------------------------------------------------------------------
 
 
-def test_nonuniform_lists_come_back_as_numpy_arrays():
+def test_nonuniform_lists_come_back_as_numpy_arrays(path):
     rng = np.random.default_rng(3)
     v = rng.standard_normal((500, 3)) * 10.0 ** rng.integers(-25, 25, (500, 3))
     s = v[:, 0]
@@ -483,7 +483,7 @@ def test_nonuniform_lists_come_back_as_numpy_arrays():
     assert np.array_equal(back["internalField"][2], arr) and back["after"] == 1
 
 
-def test_list_that_is_not_plain_numbers_takes_the_general_path():
+def test_list_that_is_not_plain_numbers_takes_the_general_path(path):
     body = "(1 2 3) " * 99 + "(1 2)"
     d = parse(f"a List<vector> 100({body});")  # a 2-vector: read as lists, not misread
     assert isinstance(d["a"][1], list) and d["a"][1][-1] == [1, 2]
@@ -493,8 +493,17 @@ def test_list_that_is_not_plain_numbers_takes_the_general_path():
     assert isinstance(d["a"][1], list) and d["a"][1][-1] == "x"
 
 
+@pytest.fixture(params=["compiled", "small"])
+def path(request, monkeypatch):
+    """Run a test through the numba pass and through the regex + numpy path."""
+    from sphfoam.io import asciinum
+
+    monkeypatch.setattr(asciinum, "COMPILED_MIN_BYTES", 0 if request.param == "compiled" else 1 << 60)
+    return request.param
+
+
 @pytest.mark.parametrize("fmt", ["%r", "%.17g", "%.6g", "%.15g", "%.18e", "%.16g", "%.25g"])
-def test_parse_numbers_is_exact(fmt):
+def test_parse_numbers_is_exact(fmt, path):
     rng = np.random.default_rng(7)
     x = np.concatenate([rng.standard_normal(3000) * 10.0 ** rng.integers(-40, 40, 3000),
                         rng.random(1000),
@@ -505,7 +514,7 @@ def test_parse_numbers_is_exact(fmt):
     assert got.tobytes() == ref.tobytes()
 
 
-def test_parse_numbers_midpoints_and_rejects():
+def test_parse_numbers_midpoints_and_rejects(path):
     import decimal
 
     rng = np.random.default_rng(11)
@@ -523,6 +532,10 @@ def test_parse_numbers_midpoints_and_rejects():
     assert parse_numbers(b"(1 2)\n(3 4)", 4, 2).tolist() == [[1.0, 2.0], [3.0, 4.0]]
     assert parse_numbers("-5 99999999999999999999999", 2, integer=True) is None  # > int64
     assert parse_numbers("-5 9223372036854775807", 2, integer=True).tolist() == [-5, 2**63 - 1]
+    assert parse_numbers("-9223372036854775808 0", 2, integer=True).tolist() == [-2**63, 0]
+    assert parse_numbers("1-2 3", 2) is None and parse_numbers("(1 2)(3 4)", 4, 2).shape == (2, 2)
+    assert parse_numbers("1 (2)", 2) is None and parse_numbers("1e5 .5 +.5 -2.", 4).tolist() == [
+        1e5, 0.5, 0.5, -2.0]
 
 
 def test_array_path_follows_the_count_rule():

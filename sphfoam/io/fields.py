@@ -33,8 +33,6 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam.io.asciinum import parse_numbers
-
 __all__ = ["write_field", "read_field", "write_state", "read_state", "has_particles", "CLOUD_DIR"]
 
 #: Sub-path of a time directory holding the particle fields.
@@ -200,9 +198,6 @@ def read_field(path: str | Path) -> np.ndarray:
     end = buf.rfind(b")")
     if end <= i:
         raise ValueError(f"{path}: unterminated list")
-    fast = parse_numbers(buf[i + 1 : end], n * ncomp, ncomp, integer=kind == "label")
-    if fast is not None:  # one compiled pass, exact (sphfoam.io.asciinum)
-        return fast
     tokens = buf[i + 1 : end].translate(_PARENS).split()
     if len(tokens) != n * ncomp:
         raise ValueError(f"{path}: expected {n * ncomp} values, found {len(tokens)}")
