@@ -54,7 +54,7 @@ How values come back from :func:`parse`:
 * ``( ... )`` -> ``list`` (a ``{ ... }`` inside a list is a ``dict`` item);
   ``[ ... ]`` -> :class:`DimensionSet`; ``key { ... }`` -> ``dict``;
 * a counted ``List<scalar>``, ``List<label>``, ``List<vector>``, ``List<vector2D>``,
-  ``List<tensor>``, ``List<symmTensor>`` or ``List<sphericalTensor>`` of at least
+  ``List<tensor>`` or ``List<symmTensor>`` of at least
   :data:`ARRAY_MIN_ITEMS` numbers -> a float64 (int64 for labels) numpy array of shape
   ``(N,)`` or ``(N, components)``, bit for bit ``float(token)`` of every token;
   shorter lists, and lists that are not plain numbers, come back as lists.
@@ -133,7 +133,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["FoamDictError", "QuotedString", "DimensionSet", "parse", "read", "dumps", "write",
-           "lookup", "expand", "read_text", "UNITS", "DIMENSIONS"]
+           "lookup", "expand", "read_text", "decode", "UNITS", "DIMENSIONS"]
 
 #: Largest file ``read``, ``#include`` or a ``$file!entry`` reference will read, in bytes.
 MAX_FILE_BYTES = 64 * 1024 * 1024
@@ -451,7 +451,7 @@ _WS_RE = re.compile(r'\s*')
 # Counted lists of a known element type, read straight into numpy arrays.
 _LIST_TYPES = {"List<scalar>": ("f", 1), "List<label>": ("i", 1), "List<vector>": ("f", 3),
                "List<vector2D>": ("f", 2), "List<symmTensor>": ("f", 6),
-               "List<tensor>": ("f", 9), "List<sphericalTensor>": ("f", 1)}
+               "List<tensor>": ("f", 9)}
 # the count, then '(' right after it or on a later line (as the general reader's counts)
 _LIST_HEAD_RE = re.compile(r'\s*([0-9]+)(?:\(|[ \t]*\n\s*\()')
 _CLOSE2_RE = re.compile(r'\)\s*\)')
