@@ -567,3 +567,18 @@ def test_deep_nesting_and_nul_in_an_include_name_are_clean_errors(tmp_path):
         parse("a { " * 100 + '#include "deep"' + " }" * 100, include_dir=tmp_path)
     with pytest.raises(FoamDictError, match="NUL"):
         parse('#include "a\x00b"', include_dir=tmp_path)
+
+
+def test_case_refuses_a_fifo_or_directory_as_a_dictionary(tmp_path):
+    from sphfoam.case.case import Case
+    from sphfoam.case.errors import CaseError
+
+    if not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs on this platform")
+    (tmp_path / "system").mkdir()
+    os.mkfifo(tmp_path / "system" / "controlDict")
+    with pytest.raises(CaseError, match="not a regular file"):
+        Case(tmp_path).control
+    (tmp_path / "system" / "particleDict").mkdir()
+    with pytest.raises(CaseError, match="is a directory"):
+        Case(tmp_path).particles

@@ -65,7 +65,7 @@ class Case:
     # --- raw dictionaries ----------------------------------------------------------------
     def read_dict(self, rel: str, required: bool = True) -> dict:
         f = self.path / rel
-        if not f.is_file():
+        if not f.exists():  # a directory, FIFO or device of that name is refused by read
             if not required:
                 return {}
             raise CaseError.single(rel, "", f"file not found in case {self.path}")
