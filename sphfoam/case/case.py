@@ -65,13 +65,12 @@ class Case:
     # --- raw dictionaries ----------------------------------------------------------------
     def read_dict(self, rel: str, required: bool = True) -> dict:
         f = self.path / rel
-        if not f.is_file():
+        if not f.exists():  # a directory, FIFO or device of that name is refused by read
             if not required:
                 return {}
             raise CaseError.single(rel, "", f"file not found in case {self.path}")
         try:
-            return _strip_header(foamdict.parse(f.read_text(), filename=rel,
-                                                include_dir=f.parent))
+            return _strip_header(foamdict.read(f, filename=rel, case_dir=self.path))
         except foamdict.FoamDictError as e:
             raise CaseError([Problem(rel, "", f"syntax error: {e}")]) from None
 

@@ -47,6 +47,7 @@ def dimensioned(dims: tuple[int, ...]):
                 if got[:len(dims)] != dims[:len(got)] or any(got[len(dims):]):
                     raise ValueError(f"dimensions {list(got)} do not match the expected "
                                      f"{list(dims)}")
+                return nums[0] * dimset[0].factor  # a value in units, e.g. [g/cm^3], to SI
             return nums[0]
         return v
 
@@ -156,8 +157,12 @@ class Gravity(Strict):
     @field_validator("dimensions", mode="before")
     @classmethod
     def _dims(cls, v):
+        if v is not None and not isinstance(v, DimensionSet):
+            raise ValueError(f"expected a dimension set [0 1 -2 0 0 0 0], got {v!r}")
         if v is not None and tuple(int(x) for x in v)[:3] != (0, 1, -2):
             raise ValueError(f"g must have dimensions [0 1 -2 0 0 0 0], got {list(v)}")
+        if v is not None and v.factor != 1:
+            raise ValueError(f"g is read in SI units: [{v.units}] is not m/s^2")
         return v
 
     model_config = ConfigDict(extra="forbid", arbitrary_types_allowed=True)

@@ -136,7 +136,10 @@ def _parse_header(buf: bytes, path: Path) -> tuple[dict[str, str], int]:
         m = _ENTRY.match(buf, i)
         if m is None:
             raise ValueError(f"{path}: malformed FoamFile header near byte {i}")
-        header[m[1].decode()] = m[2].decode().strip().strip('"')
+        try:
+            header[m[1].decode()] = m[2].decode().strip().strip('"')
+        except UnicodeDecodeError:
+            raise ValueError(f"{path}: FoamFile header is not UTF-8 text (near byte {i})") from None
         i = m.end()
 
 

@@ -17,6 +17,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from sphfoam import registry
+from sphfoam.case import foamdict
 from sphfoam.case.schemas import Vector2
 from sphfoam.registry import Coeffs, Model, register
 
@@ -130,7 +131,8 @@ class DisplacementTable(Motion):
     def resolve(self, case_path: Path) -> None:
         if self.coeffs.file is None:
             return
-        f = Path(case_path) / self.coeffs.file
+        # $FOAM_CASE / $FOAM_CASENAME / <case> expand as in OpenFOAM file names
+        f = Path(case_path) / foamdict.expand(str(self.coeffs.file), case_path)
         if not f.is_file():
             raise FileNotFoundError(f"{self.coeffs.file}: no such file in the case")
         self._set(np.loadtxt(f, ndmin=2, comments=("#", "//")), self.coeffs.file)
