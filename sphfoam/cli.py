@@ -270,7 +270,11 @@ def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
 def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
                time: Optional[list[float]] = typer.Option(None, "--time", "-t",
                                                           help="only these times")):
-    """Write VTK/<case>_<i>.vtp per time directory and a VTK/<case>.pvd for ParaView."""
+    """Write VTK/<case>.pvd for ParaView: per time a <case>_<t>.vtm of fluid and walls.
+
+    Replaces the previous export (times not selected with -t are removed); fails when
+    there is nothing to export.
+    """
     from sphfoam.io.vtk import export_case
 
     c = _case(case)
