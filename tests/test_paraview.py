@@ -21,9 +21,11 @@ import pytest
 from sphfoam.case.case import Case
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import read_field, read_state, write_field, write_state
+from sphfoam.io.vtk import export_case
 from sphfoam.runner import setup_case, write_time
 
 READ_CASE = Path(__file__).parent / "paraview" / "read_case.py"
+READ_VTK = Path(__file__).parent / "paraview" / "read_vtk.py"
 
 
 def _fields(n, seed):
@@ -158,9 +160,13 @@ def _pvpython() -> list[str] | None:
     return [xvfb, "-a", pv] if xvfb else [pv]
 
 
-@pytest.mark.skipif(_pvpython() is None,
-                    reason="ParaView's pvpython is not installed (Debian: apt-get install "
-                           "paraview xvfb); the format tests above still check the layout")
+needs_paraview = pytest.mark.skipif(
+    _pvpython() is None,
+    reason="ParaView's pvpython is not installed (Debian: apt-get install paraview xvfb); "
+           "the format tests above still check the layout")
+
+
+@needs_paraview
 def test_paraview_opens_the_case(tutorial, tmp_path):
     """ParaView's own OpenFOAM reader lists the cloud, every field and every time."""
     case, state = _setup(tutorial)
@@ -199,3 +205,26 @@ def test_paraview_opens_the_case(tutorial, tmp_path):
                 np.testing.assert_array_equal(a[:, 2], 0.0)
             else:
                 np.testing.assert_allclose(a, ours[k], rtol=2e-7, atol=1e-7, err_msg=k)
+
+
+@needs_paraview
+def test_paraview_opens_the_vtk_export(tutorial, tmp_path):
+    """ParaView reads the .pvd (multiblock fluid/walls per time) and a block's .vtp.series."""
+    case, state = _setup(tutorial)
+    state.x = state.x + 0.001
+    write_time(case, state, 0.25, 10, 1e-4)
+    export_case(case.path)
+    vtk_dir = case.path / "VTK"
+    out = tmp_path / "vtk.json"
+    cmd = _pvpython() + [str(READ_VTK), str(vtk_dir / "hydrostaticTank.pvd"),
+                         str(vtk_dir / "hydrostaticTank_fluid.vtp.series"), str(out)]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    rep = json.loads(out.read_text())
+    assert rep["pvd_times"] == rep["series_times"] == [0.0, 0.25]
+    n_fluid = int((state.kind == 0).sum())
+    for t in ("0.0", "0.25"):
+        assert rep["pvd"][t] == {"fluid": n_fluid, "walls": state.n - n_fluid}
+        assert rep["series"][t]["points"] == n_fluid
+        assert rep["series"][t]["TimeValue"] == float(t)
+        assert rep["series"][t]["U_components"] == 3

@@ -44,24 +44,44 @@ for t in report["times"]:
     report["data"][repr(t)] = entry
 
 if shot:
-    from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetDisplayProperties,
-                                 ResetCamera, SaveScreenshot, Show)
+    from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetColorTransferFunction,
+                                 GetParaViewVersion, GetScalarBar, SaveScreenshot, Show, Text)
 
+    w, h = 1600, 560
     view = GetActiveViewOrCreate("RenderView")
-    view.ViewSize = [1400, 500]
-    view.ViewTime = report["times"][-1]
+    view.ViewSize = [w, h]
+    t_shot = report["times"][-1]
+    view.ViewTime = t_shot
     view.OrientationAxesVisibility = 0
+    view.Background = [1, 1, 1]
+    try:  # ParaView >= 5.10 keeps a palette; use the plain background set above
+        view.UseColorPaletteForBackground = 0
+    except AttributeError:
+        pass
     disp = Show(r, view)
     disp.SetRepresentationType("Points")
-    disp.PointSize = 3
+    disp.PointSize = 2.5
     ColorBy(disp, ("CELLS", "U", "Magnitude"))
-    disp.RescaleTransferFunctionToDataRange(True, False)
+    lut = GetColorTransferFunction("U")
+    lut.ApplyPreset("Turbo", True)
+    disp.RescaleTransferFunctionToDataRange(False, True)
     disp.SetScalarBarVisibility(view, True)
-    view.CameraPosition = [1.25, 0.25, 10]
-    view.CameraFocalPoint = [1.25, 0.25, 0]
+    bar = GetScalarBar(lut, view)
+    bar.Title, bar.ComponentTitle = "U magnitude", "(m/s)"
+    bar.TitleColor = bar.LabelColor = [0, 0, 0]
+    bar.Orientation, bar.WindowLocation = "Horizontal", "Upper Right Corner"
+    v = GetParaViewVersion()
+    label = Text(Text=f"ParaView {v.major}.{v.minor}, OpenFOAM reader: {foam.split('/')[-1]}, "
+                      f"lagrangian/particles, t = {t_shot:g} s")
+    ld = Show(label, view)
+    ld.Color, ld.FontSize, ld.WindowLocation = [0, 0, 0], 14, "Upper Left Corner"
+    b = sm.Fetch(r).GetBlock(0).GetBlock(0).GetBounds()
+    cx, cy = 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3])
+    view.CameraParallelProjection = 1
+    view.CameraPosition, view.CameraFocalPoint = [cx, cy, 10], [cx, cy, 0]
     view.CameraViewUp = [0, 1, 0]
-    ResetCamera(view)
-    SaveScreenshot(shot, view, ImageResolution=[1400, 500])
+    view.CameraParallelScale = 1.08 * max(0.5 * (b[3] - b[2]), 0.5 * (b[1] - b[0]) * h / w)
+    SaveScreenshot(shot, view, ImageResolution=[w, h])
     report["screenshot"] = shot
 
 with open(out, "w") as fh:
