@@ -300,6 +300,20 @@ def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
     console.print(f"wrote {pvd}")
 
 
+@export_app.command("foam")
+def export_foam(case: Path = typer.Argument(Path("."), help="case directory")):
+    """Make CASE open in ParaView's OpenFOAM reader: CASE.foam, the one-cell mesh, and time
+    directories of earlier sphfoam versions rewritten in the cloud layout (values unchanged)."""
+    from sphfoam.io.polymesh import prepare_case
+
+    c = _case(case)
+    foam, upgraded = _guard(prepare_case, c.path)
+    if upgraded:
+        console.print(f"rewrote {len(upgraded)} time director{'y' if len(upgraded) == 1 else 'ies'}"
+                      f" in the OpenFOAM cloud layout: {', '.join(upgraded)}")
+    console.print(f"wrote {foam} and {c.path / 'constant' / 'polyMesh'}: paraview {foam}")
+
+
 def main():
     app()
 

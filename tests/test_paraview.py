@@ -151,6 +151,40 @@ def test_setup_writes_a_valid_one_cell_mesh_and_foam_file(tutorial):
     assert s0["positions"][:, 0].tobytes() == state.x.tobytes()
 
 
+def test_export_foam_upgrades_an_older_case(tutorial):
+    """``sphfoam export foam``: mesh, .foam and older time directories in the new layout."""
+    import shutil as sh
+
+    from typer.testing import CliRunner
+
+    from sphfoam.cli import app
+
+    case, state = _setup(tutorial)
+    sh.rmtree(case.path / "constant" / "polyMesh")
+    (case.path / "hydrostaticTank.foam").unlink()
+    s = read_state(case.path / "0")
+    for name, fmt in (("0", "binary"), ("0.5", "ascii")):       # as earlier versions wrote
+        cloud = _cloud(case.path / name)
+        cloud.mkdir(parents=True, exist_ok=True)
+        for k, a in s.items():
+            write_field(cloud / k, a, fmt=fmt, precision=17)
+    res = CliRunner().invoke(app, ["export", "foam", str(case.path)])
+    assert res.exit_code == 0, res.output
+    assert "rewrote 2 time directories" in res.output and "0, 0.5" in res.output
+    assert (case.path / "hydrostaticTank.foam").is_file()
+    assert (case.path / "constant" / "polyMesh" / "faces").is_file()
+    for name, fmt in (("0", "binary"), ("0.5", "ascii")):
+        cloud = _cloud(case.path / name)
+        head = (cloud / "positions").read_bytes()[:400].decode("latin-1")
+        assert "Cloud<passiveParticle>" in head and f"format      {fmt};" in head
+        assert "vectorField" in (cloud / "U").read_bytes()[:400].decode("latin-1")
+        r = read_state(case.path / name)
+        for k, a in s.items():
+            assert r[k].tobytes() == a.tobytes(), (name, k)
+    res = CliRunner().invoke(app, ["export", "foam", str(case.path)])
+    assert res.exit_code == 0 and "rewrote" not in res.output
+
+
 # ----------------------------------------------------------------------------- ParaView
 def _pvpython() -> list[str] | None:
     pv = shutil.which("pvpython")

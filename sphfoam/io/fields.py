@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["write_field", "read_field", "write_state", "read_state", "has_particles", "CLOUD_DIR",
-           "write_positions", "write_vectors", "POSITIONS_CLASS"]
+           "write_positions", "write_vectors", "POSITIONS_CLASS", "field_header", "upgrade_state"]
 
 #: Sub-path of a time directory holding the particle fields.
 CLOUD_DIR = Path("lagrangian") / "particles"
@@ -382,6 +382,32 @@ def read_state(time_dir: str | Path) -> dict[str, np.ndarray]:
     if not cloud.is_dir():
         raise FileNotFoundError(f"no particle data: directory {cloud} does not exist")
     return {p.name: _in_plane(read_field(p)) for p in _field_files(cloud)}
+
+
+def field_header(path: str | Path) -> dict[str, str]:
+    """The ``FoamFile`` header entries of a field file (class, format, arch, ...)."""
+    path = Path(path)
+    with path.open("rb") as fh:
+        buf = fh.read(4096)
+    return _parse_header(buf, path)[0]
+
+
+def upgrade_state(time_dir: str | Path) -> bool:
+    """Rewrite a time directory of an earlier sphfoam (``vector2DField`` positions and
+    vectors) in the cloud layout of :func:`write_state`, values unchanged bit for bit
+    (binary stays binary; ascii is rewritten with 17 digits). True if it was rewritten."""
+    cloud = Path(time_dir) / CLOUD_DIR
+    files = _field_files(cloud) if cloud.is_dir() else []
+    headers = {p.name: field_header(p) for p in files}
+    old = [n for n, h in headers.items()
+           if h.get("class") == "vector2DField" or (n == "positions"
+                                                    and not h.get("class", "").startswith("Cloud<"))]
+    if not old:
+        return False
+    fmt = headers[old[0]].get("format", "ascii")
+    state = read_state(time_dir)
+    write_state(time_dir, {n: state[n] for n in old}, fmt=fmt, precision=17)
+    return True
 
 
 def has_particles(time_dir: str | Path) -> bool:
