@@ -212,6 +212,7 @@ def test_paraview_opens_the_case(tutorial, tmp_path):
         state.v = rng.normal(size=state.n)
         case.control.writeFormat, case.control.writePrecision = fmt, 17
         folder = write_time(case, state, t, int(t * 100), 1e-4, p=rng.normal(size=state.n))
+        assert f"format      {fmt};" in (_cloud(folder) / "positions").read_bytes()[:400].decode("latin-1")
         written[folder.name] = read_state(folder)
 
     out = tmp_path / "pv.json"
