@@ -117,7 +117,8 @@ def _blow_up_text(d, path: Path) -> str:
 @app.command()
 def setup(case: Path = typer.Argument(Path("."), help="case directory"),
           force: bool = typer.Option(False, "--force", help="overwrite existing particles in 0/")):
-    """Generate particles from system/particleDict into 0/ (hydrostatic, at rest)."""
+    """Generate particles from system/particleDict into 0/ (hydrostatic, at rest), and
+    the one-cell constant/polyMesh and CASE.foam that ParaView's OpenFOAM reader opens."""
     from sphfoam.io.fields import has_particles
     from sphfoam.runner import setup_case
 
@@ -239,7 +240,10 @@ def study(studydict: Path = typer.Argument(..., help="study dictionary"),
 def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
             keep_going: bool = typer.Option(False, "--keep-going", "-k",
                                             help="show a metric that cannot be evaluated as "
-                                            "NaN instead of stopping")):
+                                            "NaN instead of stopping"),
+            as_json: bool = typer.Option(False, "--json",
+                                         help="print the metrics as JSON (NaN as null) "
+                                         "instead of a table")):
     """Error metrics of system/metricsDict for the finished run in CASE."""
     import math
 
@@ -248,6 +252,20 @@ def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
     c = _case(case)
     mset = _guard(load_metrics, c.path)
     values = _guard(mset.evaluate, c.path, strict=not keep_going)
+    if as_json:
+        import json
+
+        def finite(v):
+            return None if v is None or not math.isfinite(v) else float(v)
+
+        doc = {"case": str(c.path), "pareto": mset.pareto,
+               "metrics": {name: {"type": mset.metrics[name].name, "value": finite(mv.value),
+                                  "reference": finite(mv.reference),
+                                  "error_percent": finite(mv.error), "unit": mv.unit,
+                                  "problem": mv.problem}
+                           for name, mv in values.items()}}
+        typer.echo(json.dumps(doc, indent=2))
+        return
 
     def num(v, fmt):
         return "-" if v is None else ("nan" if not math.isfinite(v) else format(v, fmt))
@@ -270,12 +288,30 @@ def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
 def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
                time: Optional[list[float]] = typer.Option(None, "--time", "-t",
                                                           help="only these times")):
-    """Write VTK/<case>_<i>.vtp per time directory and a VTK/<case>.pvd for ParaView."""
+    """Write VTK/<case>.pvd for ParaView: per time a <case>_<t>.vtm of fluid and walls.
+
+    Replaces the previous export (times not selected with -t are removed); fails when
+    there is nothing to export.
+    """
     from sphfoam.io.vtk import export_case
 
     c = _case(case)
     pvd = _guard(export_case, c.path, times=time)
     console.print(f"wrote {pvd}")
+
+
+@export_app.command("foam")
+def export_foam(case: Path = typer.Argument(Path("."), help="case directory")):
+    """Make CASE open in ParaView's OpenFOAM reader: CASE.foam, the one-cell mesh, and time
+    directories of earlier sphfoam versions rewritten in the cloud layout (values unchanged)."""
+    from sphfoam.io.polymesh import prepare_case
+
+    c = _case(case)
+    foam, upgraded = _guard(prepare_case, c.path)
+    if upgraded:
+        console.print(f"rewrote {len(upgraded)} time director{'y' if len(upgraded) == 1 else 'ies'}"
+                      f" in the OpenFOAM cloud layout: {', '.join(upgraded)}")
+    console.print(f"wrote {foam} and {c.path / 'constant' / 'polyMesh'}: paraview {foam}")
 
 
 def main():

@@ -28,6 +28,7 @@ from sphfoam.case.case import SPH_PROPERTIES
 from sphfoam.engine.state import GHOST, WALL, ParticleState
 from sphfoam.setup.geometry import segments_of
 from sphfoam.io.fields import has_particles, read_state, write_state
+from sphfoam.io.polymesh import write_foam_files
 from sphfoam.setup.particles import default_domain, generate
 
 
@@ -79,6 +80,8 @@ def setup_case(case: Case, log=print) -> ParticleState:
                      waves=list(case.waves.values()))
     sim_p = eos.pressure(state.rho, case.context)
     write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
+    # the one-cell mesh and CASE.foam that ParaView's OpenFOAM reader needs
+    write_foam_files(case.path, *default_domain(case.particles), case.particles.dx)
     log(f"setup: {state.n_fluid} fluid + {state.n - state.n_fluid} wall particles "
         f"(dx = {case.particles.dx:g} m) written to {case.path / '0'}")
     return state

@@ -77,17 +77,21 @@ def test_export_vtk_via_cli(tutorial):
 
     pvd = case / "VTK" / "damBreak.pvd"
     assert pvd.is_file()
-    files = sorted((case / "VTK").glob("*.vtp"))
+    # one multiblock (fluid, walls) per time, named by the time (issue 16)
+    files = sorted((case / "VTK").glob("*.vtm"))
     assert len(files) == 3
-    r = vtk.vtkXMLPolyDataReader()
-    r.SetFileName(str(files[-1]))
-    r.Update()
-    out = r.GetOutput()
     state = read_state(case / "0.01")
-    assert out.GetNumberOfPoints() == len(state["rho"])
-    assert out.GetPointData().GetArray("U").GetNumberOfComponents() == 3
-    for name in ("rho", "p", "mass", "type", "origId"):
-        assert out.GetPointData().GetArray(name) is not None, name
+    n = 0
+    for block in ("fluid", "walls"):
+        r = vtk.vtkXMLPolyDataReader()
+        r.SetFileName(str(case / "VTK" / "damBreak_0.01" / f"{block}.vtp"))
+        r.Update()
+        out = r.GetOutput()
+        n += out.GetNumberOfPoints()
+        assert out.GetPointData().GetArray("U").GetNumberOfComponents() == 3
+        for name in ("rho", "p", "mass", "type", "origId"):
+            assert out.GetPointData().GetArray(name) is not None, name
+    assert n == len(state["rho"])
 
 
 def test_setup_refuses_to_overwrite_without_force(tutorial):

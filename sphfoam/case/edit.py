@@ -7,9 +7,10 @@ from pathlib import Path
 
 from sphfoam.case import foamdict
 
-#: what a clone leaves behind: results of the source case
+#: what a clone leaves behind: results of the source case, and the mesh and .foam file that
+#: setup writes for ParaView (the clone writes its own)
 RESULTS = ("[1-9]*", "0.*", "postProcessing", "VTK", "log.*", "lagrangian", "uniform",
-           "compare", "runUp", "study", "studySmall", "stability")
+           "compare", "runUp", "study", "studySmall", "stability", "polyMesh", "*.foam")
 
 
 def set_entry(case: Path, rel: str, key: str, value) -> None:

@@ -1,13 +1,27 @@
 """Export particle states to VTK XML files for ParaView.
 
-Each time directory with particles becomes one ``.vtp`` (vtkPolyData with one
-vertex cell per particle, so the Surface representation shows the points);
-a ``.pvd`` collection ties them together as a time series.
+``export_case`` writes, for every time directory with particles (``<t>`` its name)::
+
+    VTK/<case>_<t>/fluid.vtp     the fluid particles
+    VTK/<case>_<t>/walls.vtp     the wall particles (empty where the boundary has none)
+    VTK/<case>_<t>.vtm           a multiblock of the two, blocks named fluid and walls
+    VTK/<case>.pvd               the time series of the .vtm files (open this one)
+    VTK/<case>_fluid.vtp.series  the fluid alone as a time series (and _walls likewise)
+
+Each ``.vtp`` is a vtkPolyData with one vertex cell per particle (so the Surface
+representation shows the points) and stores its time as ``TimeValue`` field data.
+Vectors are 3-component point data with z = 0: ``U``, and the pairs of scalar fields
+listed in :data:`VECTOR_PAIRS` (``x0, y0`` -> ``X0``, ...). An export replaces the
+previous one: files of times not exported this time are removed, so ``-t`` never leaves
+stale files behind.
 """
 
 from __future__ import annotations
 
+import json
 import math
+import re
+import shutil
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -20,7 +34,17 @@ from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 from ..case.times import list_times
 from .fields import has_particles, read_state
 
-__all__ = ["write_vtp", "export_case"]
+__all__ = ["write_vtp", "export_case", "VECTOR_PAIRS", "BLOCKS"]
+
+#: scalar fields exported as one 3-vector (z = 0): vector name -> (x component, y component)
+VECTOR_PAIRS = {
+    "X0": ("x0", "y0"),        # a moving wall particle's rest position
+    "n": ("nx", "ny"),         # wall normal (boundary models with wall_fields)
+    "U_0": ("Ux_0", "Uy_0"),   # an integrator's previous-step velocity
+}
+
+#: the blocks of each time: name -> which particles (from the ``type`` field)
+BLOCKS = ("fluid", "walls")
 
 
 def _pad3(a: np.ndarray) -> np.ndarray:
@@ -30,12 +54,22 @@ def _pad3(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def write_vtp(path: str | Path, fields: dict[str, np.ndarray]) -> None:
+def _vectorise(fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Replace the scalar pairs of :data:`VECTOR_PAIRS` by (N, 2) vectors."""
+    out = dict(fields)
+    for vec, (cx, cy) in VECTOR_PAIRS.items():
+        if cx in out and cy in out and vec not in out:
+            out[vec] = np.column_stack([out.pop(cx), out.pop(cy)])
+    return out
+
+
+def write_vtp(path: str | Path, fields: dict[str, np.ndarray], time: float | None = None) -> None:
     """Write particles to a binary (appended, zlib-compressed) ``.vtp`` file.
 
     ``fields["positions"]`` (N, 2) gives the points (z = 0). Every other field
     becomes point data: (N,) arrays as scalars (integers as int64), (N, 2)
     arrays as 3-component vectors with z = 0, (N, 3) arrays as they are.
+    ``time`` is stored as the ``TimeValue`` field data ParaView reads.
     """
     if "positions" not in fields:
         raise KeyError("write_vtp needs a 'positions' field")
@@ -73,6 +107,10 @@ def write_vtp(path: str | Path, fields: dict[str, np.ndarray]) -> None:
         pd.AddArray(va)
         if name == "U" and a.ndim == 2:
             pd.SetActiveVectors(name)
+    if time is not None:
+        tv = numpy_to_vtk(np.array([float(time)]), deep=True)
+        tv.SetName("TimeValue")
+        poly.GetFieldData().AddArray(tv)
 
     writer = vtkXMLPolyDataWriter()
     writer.SetFileName(str(path))
@@ -84,6 +122,42 @@ def write_vtp(path: str | Path, fields: dict[str, np.ndarray]) -> None:
         raise OSError(f"failed to write {path}")
 
 
+def _time_value(folder: Path) -> float:
+    """The exact time of a time directory (``uniform/time``), else its name."""
+    from ..case import foamdict
+
+    f = folder / "uniform" / "time"
+    if f.is_file():
+        try:
+            return float(foamdict.read(f)["value"])
+        except (KeyError, ValueError, TypeError):
+            pass
+    return float(folder.name)
+
+
+def _split(fields: dict[str, np.ndarray]) -> dict[str, dict[str, np.ndarray]]:
+    """The fields of each block: fluid (type 0) and walls (every other type)."""
+    kind = np.asarray(fields.get("type", np.zeros(len(fields["positions"]), dtype=np.int64)))
+    masks = {"fluid": kind == 0, "walls": kind != 0}
+    return {b: {k: np.asarray(a)[masks[b]] for k, a in fields.items()} for b in BLOCKS}
+
+
+def _previous_outputs(out_dir: Path, name: str) -> list[Path]:
+    """What an earlier export of case ``name`` wrote into ``out_dir`` (this version's
+    ``<name>_<t>.vtm`` + ``<name>_<t>/``, older versions' ``<name>_<i>.vtp``)."""
+    pat = re.compile(re.escape(name) + r"_[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?(\.vtm|\.vtp)?$")
+    found = [p for p in out_dir.iterdir() if pat.match(p.name)
+             and (p.is_dir() or p.suffix in (".vtm", ".vtp"))]
+    found += [out_dir / f"{name}_{b}.vtp.series" for b in BLOCKS]
+    found.append(out_dir / f"{name}.pvd")
+    return [p for p in found if p.exists()]
+
+
+def _write_xml(root: ET.Element, path: Path) -> None:
+    ET.indent(root)
+    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+
+
 def export_case(
     case_dir: str | Path,
     times: list[float] | None = None,
@@ -91,28 +165,56 @@ def export_case(
 ) -> Path:
     """Export every time directory with particles (or only ``times``) to VTK.
 
-    Writes ``<case>/<out_dir_name>/<caseName>_<i>.vtp`` (i = 0, 1, ... in time
-    order) and the collection ``<caseName>.pvd``, whose path is returned.
+    Writes the files listed in the module docstring and returns the ``.pvd`` path.
+    Raises ``FileNotFoundError`` (naming the case and the times it has) when there is
+    nothing to export; nothing is written or removed then.
     """
     case_dir = Path(case_dir).resolve()
     name = case_dir.name
     out_dir = case_dir / out_dir_name
+
+    available = [(t, d) for t, d in list_times(case_dir) if has_particles(d)]
+    if not available:
+        raise FileNotFoundError(
+            f"{case_dir}: no time directory holds particles, so there is nothing to export; "
+            f"run 'sphfoam setup {case_dir}' or 'sphfoam run {case_dir}' first")
+    if times is None:
+        selected = available
+    else:
+        selected = [(t, d) for t, d in available
+                    if any(math.isclose(t, s, rel_tol=1e-9, abs_tol=1e-12) for s in times)]
+        missing = [s for s in times if not any(
+            math.isclose(t, s, rel_tol=1e-9, abs_tol=1e-12) for t, _ in available)]
+        if missing:
+            raise FileNotFoundError(
+                f"{case_dir}: no time directory with particles at "
+                + ", ".join(f"{s:g}" for s in missing)
+                + "; have: " + ", ".join(d.name for _, d in available))
+
     out_dir.mkdir(parents=True, exist_ok=True)
+    for p in _previous_outputs(out_dir, name):
+        shutil.rmtree(p) if p.is_dir() else p.unlink()
 
-    selected = [
-        (t, d)
-        for t, d in list_times(case_dir)
-        if has_particles(d)
-        and (times is None or any(math.isclose(t, s, rel_tol=1e-9, abs_tol=1e-12) for s in times))
-    ]
-
-    root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
-    coll = ET.SubElement(root, "Collection")
-    for i, (t, d) in enumerate(selected):
-        fname = f"{name}_{i}.vtp"
-        write_vtp(out_dir / fname, read_state(d))
-        ET.SubElement(coll, "DataSet", timestep=repr(t), group="", part="0", file=fname)
-    ET.indent(root)
-    pvd = out_dir / f"{name}.pvd"
-    ET.ElementTree(root).write(pvd, encoding="utf-8", xml_declaration=True)
-    return pvd
+    pvd = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
+    coll = ET.SubElement(pvd, "Collection")
+    series = {b: [] for b in BLOCKS}
+    for _, d in selected:
+        t = _time_value(d)
+        stem = f"{name}_{d.name}"
+        (out_dir / stem).mkdir()
+        vtm = ET.Element("VTKFile", type="vtkMultiBlockDataSet", version="1.0",
+                         byte_order="LittleEndian")
+        mb = ET.SubElement(vtm, "vtkMultiBlockDataSet")
+        for i, (block, f) in enumerate(_split(_vectorise(read_state(d))).items()):
+            rel = f"{stem}/{block}.vtp"
+            write_vtp(out_dir / rel, f, time=t)
+            ET.SubElement(mb, "DataSet", index=str(i), name=block, file=rel)
+            series[block].append({"name": rel, "time": t})
+        _write_xml(vtm, out_dir / f"{stem}.vtm")
+        ET.SubElement(coll, "DataSet", timestep=repr(t), group="", part="0", file=f"{stem}.vtm")
+    for block, files in series.items():
+        (out_dir / f"{name}_{block}.vtp.series").write_text(
+            json.dumps({"file-series-version": "1.0", "files": files}, indent=1))
+    path = out_dir / f"{name}.pvd"
+    _write_xml(pvd, path)
+    return path
