@@ -202,6 +202,26 @@ def plot(case: Path = typer.Argument(Path("."), help="case directory"),
 
 
 @app.command()
+def render(case: Path = typer.Argument(Path("."), help="case directory"),
+           field: str = typer.Option("U", "--field", "-f", help="colour by this field: U "
+                                     "(|U|), Ux, Uy, p, rho or any scalar field written"),
+           time: Optional[list[float]] = typer.Option(None, "--time", "-t",
+                                                      help="only these times"),
+           movie: str = typer.Option("auto", "--movie", help="auto (mp4 with ffmpeg, else "
+                                     "gif), gif, mp4 or none"),
+           fps: float = typer.Option(5.0, "--fps", min=0.1, help="movie frames per second"),
+           width: int = typer.Option(1000, "--width", min=200, help="frame width in pixels"),
+           value_range: Optional[tuple[float, float]] = typer.Option(
+               None, "--range", help="colour range LO HI (default: min..max over all frames)")):
+    """PNG frames of the particles coloured by a field, and a GIF or MP4 of the run."""
+    from sphfoam.render import render_case
+
+    c = _case(case)
+    _guard(render_case, c.path, field, time, movie=movie, fps=fps, width=width,
+           value_range=value_range, log=console.print)
+
+
+@app.command()
 def study(studydict: Path = typer.Argument(..., help="study dictionary"),
           jobs: Optional[int] = typer.Option(None, "--jobs", "-n",
                                              help="runs at once (default: the dictionary's jobs)"),
