@@ -186,19 +186,19 @@ def sample(case: Path = typer.Argument(Path("."), help="case directory"),
 def plot(case: Path = typer.Argument(Path("."), help="case directory"),
          theory: str = typer.Option("mcCowan", "--theory", help="wave theory to compare with "
                                     "(sphfoam models waveTheory)"),
-         func: Optional[str] = typer.Option(None, "--func", "-f",
-                                            help="the waveGauges object (default: the first)"),
+         func: Optional[list[str]] = typer.Option(None, "--func", "-f",
+                                                  help="only this function object"),
          height: Optional[float] = typer.Option(None, help="wave height H (default: from "
                                                 "the Goring paddle or constant/waveProperties)"),
          depth: Optional[float] = typer.Option(None, help="still water depth d")):
-    """PNG of the wave gauges against a solitary-wave theory aligned at the first gauge."""
+    """PNG of every function object against its reference (theory or experiment)."""
     from sphfoam import registry
-    from sphfoam.postprocess import plot_gauges
+    from sphfoam.postprocess import plot_case
 
     c = _case(case)
     if theory not in registry.names("waveTheory"):
         _fail("bad option", f"--theory: {str(registry.UnknownModel('waveTheory', theory, registry.names('waveTheory')))}")
-    _guard(plot_gauges, c.path, theory, func, height, depth, log=console.print)
+    _guard(plot_case, c.path, func, theory, height, depth, log=console.print)
 
 
 @app.command()
