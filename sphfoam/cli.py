@@ -243,13 +243,15 @@ def render(case: Path = typer.Argument(Path("."), help="case directory"),
            fps: float = typer.Option(5.0, "--fps", min=0.1, help="movie frames per second"),
            width: int = typer.Option(1000, "--width", min=200, help="frame width in pixels"),
            value_range: Optional[tuple[float, float]] = typer.Option(
-               None, "--range", help="colour range LO HI (default: min..max over all frames)")):
+               None, "--range", help="colour range LO HI (default: min..max over all frames)"),
+           box: Optional[tuple[float, float, float, float]] = typer.Option(
+               None, "--box", help="show only X0 Y0 X1 Y1 (m)")):
     """PNG frames of the particles coloured by a field, and a GIF or MP4 of the run."""
     from sphfoam.render import render_case
 
     c = _case(case)
     _guard(render_case, c.path, field, time, movie=movie, fps=fps, width=width,
-           value_range=value_range, log=_say)
+           value_range=value_range, box=box, log=_say)
 
 
 @app.command()

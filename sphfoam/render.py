@@ -67,10 +67,12 @@ def _choices(fields: dict) -> list[str]:
 
 def render_case(case_dir, field_name: str = "U", times: list[float] | None = None,
                 movie: str = "auto", fps: float = 5.0, width: int = 1000,
-                value_range: tuple[float, float] | None = None, log=print) -> Rendered:
+                value_range: tuple[float, float] | None = None,
+                box: tuple[float, float, float, float] | None = None, log=print) -> Rendered:
     """PNG frames of the written times (all, or the ``times`` given) and a movie
     (``movie``: auto = MP4 with ffmpeg, else GIF; gif; mp4; none). ``width`` is the frame
-    width in pixels; every frame has the same size."""
+    width in pixels; every frame has the same size. ``box`` (x0, y0, x1, y1) shows only
+    that part of the case (and takes the colour range from the particles inside it)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -95,6 +97,8 @@ def render_case(case_dir, field_name: str = "U", times: list[float] | None = Non
                                + (" at the times asked for" if times else
                                   ": run `sphfoam setup` or `sphfoam run` first"))
     dx = case.particles.dx
+    if box is not None and not (box[2] > box[0] and box[3] > box[1]):
+        raise CaseError.single("--box", "", f"x1 > x0 and y1 > y0 needed, got {box}")
 
     # pass 1: the fixed axes and colour range over all frames
     lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
@@ -110,6 +114,9 @@ def render_case(case_dir, field_name: str = "U", times: list[float] | None = Non
         pos = np.asarray(f["positions"], float)[:, :2]
         lo, hi = np.minimum(lo, pos.min(axis=0)), np.maximum(hi, pos.max(axis=0))
         fluid = (np.asarray(f["type"]) == FLUID) & np.isfinite(v)
+        if box is not None:
+            fluid &= (pos[:, 0] >= box[0]) & (pos[:, 0] <= box[2]) & \
+                (pos[:, 1] >= box[1]) & (pos[:, 1] <= box[3])
         if fluid.any():
             vmin, vmax = min(vmin, float(v[fluid].min())), max(vmax, float(v[fluid].max()))
     if value_range is not None:
@@ -119,6 +126,8 @@ def render_case(case_dir, field_name: str = "U", times: list[float] | None = Non
     if vmax <= vmin:
         vmax = vmin + max(abs(vmin), 1.0) * 1e-6
     lo, hi = lo - 2 * dx, hi + 2 * dx
+    if box is not None:
+        lo, hi = np.array(box[:2], float), np.array(box[2:], float)
 
     # the figure: equal axes of a fixed size in pixels, a colour bar on the right
     dpi = 100

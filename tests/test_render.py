@@ -72,6 +72,20 @@ def test_field_range_times_and_no_movie(three_times):
     assert near(colours(r.frames[0]), VIRIDIS_HIGH)   # Ux = 2 clipped to the top of the range
 
 
+def test_box_sets_the_view_and_the_colour_range(three_times):
+    """Only y < 0.1 (the two lowest rows of fluid, y = 0.025 and 0.075): the range of p =
+    rho0 g (0.25 - y) comes from them alone; the axes keep the box's aspect."""
+    r = render_case(three_times, "p", box=(-0.1, -0.1, 0.9, 0.1), movie="none", width=500,
+                    log=lambda m: None)
+    assert r.vmin == pytest.approx(9810 * 0.175) and r.vmax == pytest.approx(9810 * 0.225)
+    w, h = Image.open(r.frames[0]).size
+    assert w == 500 and h == round((500 - 180) * 0.2) + 90
+    full = render_case(three_times, "p", movie="none", log=lambda m: None)
+    assert full.vmin == pytest.approx(9810 * 0.025)
+    with pytest.raises(CaseError, match="x1 > x0"):
+        render_case(three_times, box=(1, 0, 0, 1), movie="none", log=lambda m: None)
+
+
 def test_bad_field_and_no_results_are_clear_errors(three_times, tutorial):
     with pytest.raises(CaseError) as e:
         render_case(three_times, "speed", movie="none", log=lambda m: None)
