@@ -18,7 +18,7 @@ import numpy as np
 
 from sphfoam import registry
 from sphfoam.case.case import Case
-from sphfoam.case.errors import CaseError
+from sphfoam.case.errors import CaseError, Problem
 from sphfoam.case.times import list_times
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import has_particles, read_state
@@ -431,20 +431,19 @@ def plot_case(case_dir, names: list[str] | None = None, theory: str = "mcCowan",
     if not functions:
         raise CaseError.single("system/controlDict", "functions", "no function objects to plot")
     wave = _reference_wave(case, theory, height, depth)
-    out, missing = [], []
+    out, missing, failed = [], [], []
     for name, fo in functions.items():
         kind = fo.name
         if kind == "waveGauges":
+            if _series(case, name) is None:
+                missing.append(name)
+                continue
             try:
                 png, _ = plot_gauges(case.path, theory, name, height, depth, log=log)
-            except CaseError:
-                if _series(case, name) is not None:
-                    raise                      # output but no wave: the gauges need one
-                png = None
-            if png is not None:
-                out.append(png)
-            else:
-                missing.append(name)
+            except CaseError as e:             # output but no wave: the gauges need one
+                failed.extend(e.problems)
+                continue
+            out.append(png)
             continue
         if kind == "probes":
             png = plot_probes(case, name, fo, wave, theory)
@@ -466,9 +465,12 @@ def plot_case(case_dir, names: list[str] | None = None, theory: str = "mcCowan",
         else:
             out.append(png)
             log(f"{name}: {png.relative_to(case.path)}")
-    if missing and (names or not out):
-        raise CaseError.single(str(case.path), "", "no output of " + ", ".join(missing)
-                               + ": run the case or `sphfoam sample` first")
-    for name in missing:
-        log(f"{name}: no output yet, not plotted")
+    problems = list(failed)
+    if missing:
+        problems.append(Problem(str(case.path), "", "no output of " + ", ".join(missing)
+                                + ": run the case or `sphfoam sample` first"))
+    if problems and (names or not out):
+        raise CaseError(problems)
+    for p in problems:
+        log(f"not plotted: {p}")
     return out

@@ -4,7 +4,7 @@ One PNG per written time directory, the fluid particles coloured by a field (the
 magnitude |U| by default) and the wall particles grey, on equal axes that stay the same for
 every frame (the box around all particles of all frames), with a colour bar whose range is
 fixed over the frames (min..max of the field over the fluid particles of all frames, unless
-given). Each particle is a square of side dx, so a still block of water looks solid. The
+given). Each particle is a disc 1.3 dx across, so the water reads as one body. The
 frames are joined into an animated GIF (matplotlib's PillowWriter) or an MP4 (matplotlib's
 FFMpegWriter, when ``ffmpeg`` is on the PATH). Everything is drawn with whole arrays (one
 scatter per frame and kind), never per particle.
@@ -32,6 +32,8 @@ DERIVED = {"U": "|U| (m/s)", "Ux": "Ux (m/s)", "Uy": "Uy (m/s)"}
 UNITS = {"p": "p (Pa)", "rho": "rho (kg/m^3)", "mass": "mass (kg/m)"}
 MOVIES = ("auto", "gif", "mp4", "none")
 WALL_GREY = "#9a9a9a"
+#: marker diameter in dx: discs a little wider than the spacing, so water reads as a body
+MARKER = 1.3
 
 
 @dataclass
@@ -145,12 +147,12 @@ def render_case(case_dir, field_name: str = "U", times: list[float] | None = Non
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     px_per_m = ax_w / span[0]
-    size = (dx * px_per_m * 72.0 / dpi) ** 2                    # a square of side dx (pt^2)
+    size = (MARKER * dx * px_per_m * 72.0 / dpi) ** 2            # marker diameter (pt^2)
     empty = np.zeros((0, 2))
-    walls = ax.scatter(empty[:, 0], empty[:, 1], s=size, marker="s", c=WALL_GREY,
-                       linewidths=0)
-    fluid_sc = ax.scatter(empty[:, 0], empty[:, 1], s=size, marker="s", c=[], cmap="viridis",
-                          vmin=vmin, vmax=vmax, linewidths=0)
+    walls = ax.scatter(empty[:, 0], empty[:, 1], s=size, marker="o", c=WALL_GREY,
+                       linewidths=0, snap=False)
+    fluid_sc = ax.scatter(empty[:, 0], empty[:, 1], s=size, marker="o", c=[], cmap="viridis",
+                          vmin=vmin, vmax=vmax, linewidths=0, snap=False)
     label = DERIVED.get(field_name) or UNITS.get(field_name, field_name)
     fig.colorbar(fluid_sc, cax=cax, label=label)
     title = ax.set_title("")

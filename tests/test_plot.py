@@ -14,6 +14,7 @@ from PIL import Image
 from typer.testing import CliRunner
 
 from sphfoam.case.case import Case
+from sphfoam.case.edit import set_entry
 from sphfoam.case.errors import CaseError
 from sphfoam.cli import app
 from sphfoam.postprocess import plot_case, run_up_reference, sample
@@ -75,6 +76,15 @@ def test_dam_break_front_profile_and_missing_output(tutorial):
     sample(path, **quiet)
     (png,) = plot_case(path, **quiet)
     assert png == path / "postProcessing/front/0/front.png"
+    # gauges in a case without a wave: the others are drawn, the gauges reported
+    set_entry(path, "system/controlDict", "functions.gauges",
+              {"type": "waveGauges", "x": [0.1, 0.5]})
+    sample(path, ["gauges"], **quiet)
+    said = []
+    assert [p.name for p in plot_case(path, log=said.append)] == ["front.png"]
+    assert any(m.startswith("not plotted:") and "no wave height" in m for m in said), said
+    with pytest.raises(CaseError, match="no wave height"):
+        plot_case(path, ["gauges"], **quiet)
 
     pois = tutorial("poiseuille")
     Case(pois).validate()
