@@ -63,6 +63,34 @@ def test_obj_quads_tilted_plane_scale_and_translate(tmp_path):
     assert signed_area(loop) < 0
 
 
+def _outward(V, faces):
+    """Each face's vertex order reversed where its normal points towards the origin."""
+    out = []
+    for f in faces:
+        P = V[list(f)]
+        n = np.cross(P[1] - P[0], P[2] - P[0])
+        out.append(list(f) if n @ P.mean(axis=0) > 0 else list(f)[::-1])
+    return np.array(out)
+
+
+def test_obj_polygon_faces(tmp_path):
+    """A hexagonal prism along y (OBJ: hexagon caps at y = -1, 1 as `polygon` cells, quad
+    sides, outward normals) cut by z = 0 through two of its vertices: the rectangle
+    |x| <= 1, |y| <= 1, its short sides from the caps, clockwise."""
+    ang = np.radians(60.0 * np.arange(6))
+    V = np.vstack([np.column_stack([np.cos(ang), np.full(6, y), np.sin(ang)])
+                   for y in (-1.0, 1.0)])
+    sides = _outward(V, [[k, (k + 1) % 6, 6 + (k + 1) % 6, 6 + k] for k in range(6)])
+    caps = _outward(V, [list(range(6)), list(range(6, 12))])
+    f = tmp_path / "hex.obj"
+    meshio.write(f, meshio.Mesh(V, [("quad", sides), ("polygon", caps)]))
+    assert [c.type for c in meshio.read(f).cells] == ["quad", "polygon"]
+    (loop,) = read_mesh_walls(f)
+    assert len(loop) == 5
+    assert {tuple(np.round(p, 9)) for p in loop} == {(-1, -1), (-1, 1), (1, 1), (1, -1)}
+    assert signed_area(loop) == pytest.approx(-4.0)
+
+
 def test_line_cells_chain_merge_and_orientation(tmp_path):
     """Line cells (VTK): one reversed cell is joined into the chain, which runs the way most
     cells do; collinear cells merge into one segment."""

@@ -6,7 +6,8 @@ on their *right* (``side right``, as for a ``polyline`` wall):
 * **line cells** (``line``, and the end nodes of ``line3``), e.g. a ``.vtk`` or Gmsh ``.msh``
   of line segments, projected on the (x, y) plane; the solid lies on the right of the cells'
   direction (each connected chain takes the direction most of its cells have);
-* **a surface** (``triangle``, ``quad`` cells; the corner nodes of their higher-order forms),
+* **a surface** (``triangle``, ``quad`` cells, the corner nodes of their higher-order forms,
+  and convex ``polygon`` cells, split into fans of triangles),
   e.g. an STL, OBJ, VTK or Gmsh surface of a 3-D body: its section by the plane z = ``z``.
   Each face crossing the plane contributes the segment between the two points where its
   edges cut the plane, oriented so that the face's normal (right-hand rule on its vertex
@@ -59,6 +60,12 @@ def read_mesh_walls(path, z: float = 0.0, scale: float = 1.0,
         pts = np.column_stack([pts, np.zeros(len(pts))])
     lines, faces = [], []
     for block in mesh.cells:
+        if block.type == "polygon":              # n-gons (OBJ, VTK): fans of triangles
+            for f in (block.data if isinstance(block.data, list) else list(block.data)):
+                f = np.asarray(f, dtype=np.int64)
+                if f.size >= 3:
+                    faces.append(np.column_stack([np.full(f.size - 2, f[0]), f[1:-1], f[2:]]))
+            continue
         data = np.asarray(block.data, dtype=np.int64)
         if block.type in _LINE_CELLS and data.size:
             lines.append(data[:, :_LINE_CELLS[block.type]])
