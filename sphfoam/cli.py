@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Optional
+from typing import Literal, Optional
 
 import typer
 from rich.console import Console
@@ -238,8 +238,8 @@ def render(case: Path = typer.Argument(Path("."), help="case directory"),
                                      "(|U|), Ux, Uy, p, rho or any scalar field written"),
            time: Optional[list[float]] = typer.Option(None, "--time", "-t",
                                                       help="only these times"),
-           movie: str = typer.Option("auto", "--movie", help="auto (mp4 with ffmpeg, else "
-                                     "gif), gif, mp4 or none"),
+           movie: Literal["auto", "gif", "mp4", "none"] = typer.Option(
+               "auto", "--movie", help="auto: mp4 when ffmpeg is on the PATH, else gif"),
            fps: float = typer.Option(5.0, "--fps", min=0.1, help="movie frames per second"),
            width: int = typer.Option(1000, "--width", min=200, help="frame width in pixels"),
            value_range: Optional[tuple[float, float]] = typer.Option(

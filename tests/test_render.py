@@ -3,6 +3,8 @@ walls, a GIF with one frame per time; clear errors for a bad field or no results
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -113,3 +115,6 @@ def test_cli_render(three_times):
     assert Image.open(three_times / "postProcessing/render/p/0.png").size[0] == 400
     r = CliRunner().invoke(app, ["render", str(three_times), "-f", "nope"])
     assert r.exit_code != 0 and "Traceback" not in r.output and "'nope'" in r.output
+    r = CliRunner().invoke(app, ["render", str(three_times), "--movie", "avi"])
+    text = re.sub(r"[│╭╮╰╯─\s]+", " ", r.output)           # the error panel, unwrapped
+    assert r.exit_code == 2 and "'avi' is not one of 'auto', 'gif', 'mp4', 'none'" in text
