@@ -268,8 +268,8 @@ def study(studydict: Path = typer.Argument(..., help="study dictionary"),
                                             help="only rebuild the tables and plot")):
     """Run a study: variants x resolutions of a base case, in parallel, with tables and a plot.
 
-    Writes a CSV and a Markdown table (runtime relative to the baseline, like T Table 4.3) and
-    an error-vs-cost Pareto plot."""
+    Writes study.csv, study.md (runtime relative to the baseline, as T Table 4.3), pareto.png.
+    """
     from sphfoam import study as st
 
     s = _guard(st.load, studydict, only)

@@ -39,9 +39,11 @@ def test_every_command_summary_is_one_sentence():
     """The first paragraph of each command's docstring (typer's summary in `sphfoam --help`)
     is one line ending with a full stop, so the list never breaks mid-sentence."""
     for c in app.registered_commands:
-        first = c.callback.__doc__.strip().split("\n\n")[0]
+        first, *rest = c.callback.__doc__.strip().split("\n\n")
         assert "\n" not in first and first.endswith("."), (c.callback.__name__, first)
         assert len(first) <= 100, first
+        # typer keeps the line breaks of later paragraphs: one line each
+        assert all("\n" not in p.strip() for p in rest), (c.callback.__name__, rest)
     out = runner.invoke(app, ["--help"]).output
     assert "Run a study: variants x resolutions of a base case, in parallel," in out
 
