@@ -47,6 +47,30 @@ def test_stl_box_section_is_the_rectangle_clockwise(tmp_path):
     assert signed_area(loop) == pytest.approx(-0.3, rel=1e-12)      # clockwise, area 0.3
 
 
+def test_faceted_cylinder_gives_one_closed_loop_on_the_circle(tmp_path):
+    """A cylinder of 64 facets, radius 0.3 about (1, 0.5), in a binary STL (triangles only,
+    caps as fans): one loop through the 64 vertices, all on the circle, clockwise, enclosing
+    the polygon's area."""
+    n, r = 64, 0.3
+    ang = 2 * np.pi * np.arange(n) / n
+    ring = np.column_stack([1 + r * np.cos(ang), 0.5 + r * np.sin(ang)])
+    V = np.vstack([np.column_stack([ring, np.full(n, z)]) for z in (-0.5, 0.5)]
+                  + [[[1, 0.5, -0.5], [1, 0.5, 0.5]]])
+    k = np.arange(n)
+    k1 = (k + 1) % n
+    tris = np.concatenate([np.column_stack([k, k1, n + k1]), np.column_stack([k, n + k1, n + k]),
+                           np.column_stack([np.full(n, 2 * n), k1, k]),
+                           np.column_stack([np.full(n, 2 * n + 1), n + k, n + k1])])
+    f = tmp_path / "cylinder.stl"
+    meshio.write(f, meshio.Mesh(V, [("triangle", tris)]), binary=True)
+    (loop,) = read_mesh_walls(f)
+    p = np.asarray(loop)
+    assert len(loop) == n + 1 and np.allclose(p[0], p[-1])
+    assert np.allclose(np.hypot(p[:, 0] - 1, p[:, 1] - 0.5), r, atol=1e-6)  # float32 STL
+    assert signed_area(loop) == pytest.approx(-0.5 * n * r * r * np.sin(2 * np.pi / n),
+                                              rel=1e-5)
+
+
 def test_obj_quads_tilted_plane_scale_and_translate(tmp_path):
     """The box tilted about the y axis and cut at z = 0.25 (file units): the section of the
     faces x = x0 + z tan(a); then scale 0.001 (a file in mm) and a shift."""

@@ -122,15 +122,20 @@ def _section(pts: np.ndarray, tris: np.ndarray, z0: float) -> np.ndarray:
     above = P[:, :, 2] >= z0
     n_above = above.sum(axis=1)
     cut = (n_above == 1) | (n_above == 2)
-    P, above = P[cut], above[cut]
+    P, above, tris = P[cut], above[cut], tris[cut]
     if not len(P):
         return np.zeros((0, 2, 2))
     ends = []
     for a, b in ((0, 1), (1, 2), (2, 0)):           # the two edges whose ends differ
-        za, zb = P[:, a, 2], P[:, b, 2]
+        # from the end with the lower vertex number, so that the two faces sharing an edge
+        # compute the very same point, and exactly a vertex lying on the plane
+        swap = (tris[:, a] > tris[:, b])[:, None]
+        o = np.where(swap, P[:, b], P[:, a])
+        e = np.where(swap, P[:, a], P[:, b])
         crosses = above[:, a] != above[:, b]
-        t = np.where(crosses, (z0 - za) / np.where(crosses, zb - za, 1.0), 0.0)
-        q = P[:, a, :2] + t[:, None] * (P[:, b, :2] - P[:, a, :2])
+        t = np.where(crosses, (z0 - o[:, 2]) / np.where(crosses, e[:, 2] - o[:, 2], 1.0), 0.0)
+        q = o[:, :2] + t[:, None] * (e[:, :2] - o[:, :2])
+        q = np.where((t >= 1.0)[:, None], e[:, :2], np.where((t <= 0.0)[:, None], o[:, :2], q))
         ends.append((crosses, q))
     first = np.where(ends[0][0][:, None], ends[0][1], ends[1][1])
     second = np.where(ends[2][0][:, None], ends[2][1], ends[1][1])
