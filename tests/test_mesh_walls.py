@@ -178,6 +178,8 @@ def _problem(case) -> str:
 
 
 def test_missing_unreadable_empty_and_uncut_meshes_are_clear_errors(tutorial, tmp_path):
+    with pytest.raises(MeshWallError, match="file not found"):
+        read_mesh_walls(tmp_path / "none.stl")
     key = "system/particleDict: walls.obstacle.file"
     msg = _problem(_mesh_case(tutorial, file="constant/geometry/nothere.stl"))
     assert key in msg and "nothere.stl: file not found" in msg
