@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Optional
+from typing import Literal, Optional
 
 import typer
 from rich.console import Console
@@ -13,12 +13,31 @@ from rich.table import Table
 
 from sphfoam import __version__
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
+app = typer.Typer(add_completion=True, no_args_is_help=True,
                   help="sphfoam: SPH for free-surface water flows, driven like an OpenFOAM case.")
 export_app = typer.Typer(no_args_is_help=True, help="Export results for other tools.")
 app.add_typer(export_app, name="export")
 console = Console()
 err_console = Console(stderr=True)
+
+
+def _flags_take_no_value() -> None:
+    """typer's rich help prints a value type after on/off flags (``--force <bool>``), though
+    they take none (typer 0.2x); show them as the bare flags they are."""
+    from typer.core import TyperOption
+
+    show = TyperOption.display_type_rich
+    if getattr(show, "flags_fixed", False):
+        return
+
+    def display_type_rich(self, ctx):
+        return None if (self.is_flag or self.count) else show(self, ctx)
+
+    display_type_rich.flags_fixed = True
+    TyperOption.display_type_rich = display_type_rich
+
+
+_flags_take_no_value()
 _state = {"debug": False}
 
 
@@ -84,8 +103,8 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
     _threads(threads)
     c = _case(case)
     try:
-        rep = _guard(run_case, c, progress=not no_progress and sys.stderr.isatty(),
-                     echo=console.print, end_time=end_time)
+        rep = _guard(run_case, c, progress=not no_progress and console.is_terminal,
+                     echo=_echo, end_time=end_time, console=console)
     except BlowUp as e:
         if _state["debug"]:
             raise
@@ -94,10 +113,22 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
         err_console.print("[yellow]interrupted: the current state was written; "
                           "`sphfoam run` continues from it (startFrom latestTime).")
         raise typer.Exit(130)
-    console.print(f"[green]done[/]: {rep.steps} steps, {rep.particles} particles, run "
+    _say(f"[green]done[/]: {rep.steps} steps, {rep.particles} particles, run "
                   f"{rep.run_seconds:.1f} s + compile {rep.compile_seconds:.1f} s "
                   f"({'cached' if rep.cache_hit else 'cold'}); "
                   f"{rep.particle_steps_per_second:.3g} particle-steps/s")
+
+
+def _say(msg: str) -> None:
+    """One message line, never hard-wrapped (rich wraps at 80 columns when the output is not
+    a terminal: CI logs and pipes would get lines cut in two)."""
+    console.print(msg, soft_wrap=True)
+
+
+def _echo(line: str) -> None:
+    """A log line of a run, on the console the progress bar draws on (so it goes above the
+    bar), taken literally (no rich markup in it), never hard-wrapped."""
+    console.print(line, markup=False, soft_wrap=True)
 
 
 def _blow_up_text(d, path: Path) -> str:
@@ -125,7 +156,7 @@ def setup(case: Path = typer.Argument(Path("."), help="case directory"),
     c = _case(case)
     if has_particles(c.path / "0") and not force:
         _fail("setup", f"{c.path / '0'} already holds particles; use --force to overwrite")
-    _guard(setup_case, c, console.print)
+    _guard(setup_case, c, _say)
 
 
 @app.command()
@@ -180,26 +211,48 @@ def sample(case: Path = typer.Argument(Path("."), help="case directory"),
     from sphfoam.postprocess import sample as do_sample
 
     c = _case(case)
-    _guard(do_sample, c.path, func, log=console.print)
+    _guard(do_sample, c.path, func, log=_say)
 
 
 @app.command()
 def plot(case: Path = typer.Argument(Path("."), help="case directory"),
          theory: str = typer.Option("mcCowan", "--theory", help="wave theory to compare with "
                                     "(sphfoam models waveTheory)"),
-         func: Optional[str] = typer.Option(None, "--func", "-f",
-                                            help="the waveGauges object (default: the first)"),
+         func: Optional[list[str]] = typer.Option(None, "--func", "-f",
+                                                  help="only this function object"),
          height: Optional[float] = typer.Option(None, help="wave height H (default: from "
                                                 "the Goring paddle or constant/waveProperties)"),
          depth: Optional[float] = typer.Option(None, help="still water depth d")):
-    """PNG of the wave gauges against a solitary-wave theory aligned at the first gauge."""
+    """PNG of every function object against its reference (theory or experiment)."""
     from sphfoam import registry
-    from sphfoam.postprocess import plot_gauges
+    from sphfoam.postprocess import plot_case
 
     c = _case(case)
     if theory not in registry.names("waveTheory"):
         _fail("bad option", f"--theory: {str(registry.UnknownModel('waveTheory', theory, registry.names('waveTheory')))}")
-    _guard(plot_gauges, c.path, theory, func, height, depth, log=console.print)
+    _guard(plot_case, c.path, func, theory, height, depth, log=_say)
+
+
+@app.command()
+def render(case: Path = typer.Argument(Path("."), help="case directory"),
+           field: str = typer.Option("U", "--field", "-f", help="colour by this field: U "
+                                     "(|U|), Ux, Uy, p, rho or any scalar field written"),
+           time: Optional[list[float]] = typer.Option(None, "--time", "-t",
+                                                      help="only these times"),
+           movie: Literal["auto", "gif", "mp4", "none"] = typer.Option(
+               "auto", "--movie", help="auto: mp4 when ffmpeg is on the PATH, else gif"),
+           fps: float = typer.Option(5.0, "--fps", min=0.1, help="movie frames per second"),
+           width: int = typer.Option(1000, "--width", min=200, help="frame width in pixels"),
+           value_range: Optional[tuple[float, float]] = typer.Option(
+               None, "--range", help="colour range LO HI (default: min..max over all frames)"),
+           box: Optional[tuple[float, float, float, float]] = typer.Option(
+               None, "--box", help="show only X0 Y0 X1 Y1 (m)")):
+    """PNG frames of the particles coloured by a field, and a GIF or MP4 of the run."""
+    from sphfoam.render import render_case
+
+    c = _case(case)
+    _guard(render_case, c.path, field, time, movie=movie, fps=fps, width=width,
+           value_range=value_range, box=box, log=_say)
 
 
 @app.command()
@@ -214,8 +267,10 @@ def study(studydict: Path = typer.Argument(..., help="study dictionary"),
                                        help="list the runs and their overrides; run nothing"),
           collect_only: bool = typer.Option(False, "--collect",
                                             help="only rebuild the tables and plot")):
-    """Run a study: the base case's variants x resolutions, in parallel; CSV, Markdown table
-    (runtime relative to the baseline, like T Table 4.3) and an error-vs-cost Pareto plot."""
+    """Run a study: variants x resolutions of a base case, in parallel, with tables and a plot.
+
+    Writes study.csv, study.md (runtime relative to the baseline, as T Table 4.3), pareto.png.
+    """
     from sphfoam import study as st
 
     s = _guard(st.load, studydict, only)
@@ -232,7 +287,7 @@ def study(studydict: Path = typer.Argument(..., help="study dictionary"),
         rows = st.collect(s)
     else:
         rows = _guard(st.run_study, s, jobs=jobs, scheduler=scheduler, rerun=rerun,
-                      log=console.print)
+                      log=_say)
     console.print((s.root / "study.md").read_text() if rows else "no results yet")
 
 
@@ -297,7 +352,7 @@ def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
 
     c = _case(case)
     pvd = _guard(export_case, c.path, times=time)
-    console.print(f"wrote {pvd}")
+    _say(f"wrote {pvd}")
 
 
 @export_app.command("foam")

@@ -104,6 +104,9 @@ FALLBACK_DESCRIPTIONS: dict[str, dict[str, str]] = {
         "layers": "rows of wall particles",
         "side": "side of the line, looking along it, on which the wall rows lie",
     },
+    "MeshWalls": {
+        "type": "wall rows along the lines of a mesh file (STL, OBJ, VTK, Gmsh, ...)",
+    },
     "Domain": {
         "min": "lower-left corner",
         "max": "upper-right corner",

@@ -1,9 +1,12 @@
 """Post-processing of saved time directories: ``sphfoam sample`` and ``sphfoam plot``.
 
 ``sample`` evaluates function objects on the written times of a case (like OpenFOAM's
-``postProcess -func``), so gauges can be added after a run. ``plot`` draws the wave-gauge
-series of a case against a solitary-wave theory, aligned at the first gauge (T Figs
-4.15-4.20), and tabulates the wave height at each gauge.
+``postProcess -func``), so gauges can be added after a run. ``plot`` draws every function
+object against its reference: the wave gauges against a solitary-wave theory, aligned at the
+first gauge (T Figs 4.15-4.20), with a table of the wave height at each gauge; probes and
+lines against the theory's p, u, w; run-up against the maximum run-up of theory; the crest
+against the theory's celerity and height; the dam-break front against Martin & Moyce (1952)
+and Ritter (1892); velocity profiles against their channel theory.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import numpy as np
 
 from sphfoam import registry
 from sphfoam.case.case import Case
-from sphfoam.case.errors import CaseError
+from sphfoam.case.errors import CaseError, Problem
 from sphfoam.case.times import list_times
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import has_particles, read_state
@@ -137,3 +140,338 @@ def plot_gauges(case_dir, theory: str = "mcCowan", name: str | None = None,
             fh.write("\t".join(f"{v:.6g}" for v in r) + "\n")
     log(f"{png.relative_to(case.path)}, {table.relative_to(case.path)}")
     return png, rows
+
+
+# --- `sphfoam plot`: every function object against its reference -----------------------------
+#: function-object types `plot_case` draws (velocityProfile redraws its own table)
+PLOTTED = ("waveGauges", "probes", "lines", "runUp", "crestTracker", "damBreakFront",
+           "velocityProfile")
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _series(case: Case, name: str, filename: str | None = None):
+    """(columns, rows sorted by time, latest start folder) of a function object's output,
+    all restarts joined; None when it wrote nothing."""
+    from sphfoam.models.metrics import read_table, start_folders
+
+    folders = start_folders(case.path, name)
+    cols, parts = None, []
+    for _, folder in folders:
+        f = folder / (filename or f"{name}.dat")
+        if f.is_file():
+            c, d = read_table(f)
+            if d.size:
+                cols = c
+                parts.append(d)
+    if not parts:
+        return None
+    data = np.vstack(parts)
+    data = data[np.argsort(data[:, 0], kind="stable")]
+    return cols, data, folders[-1][1]
+
+
+def _reference_wave(case: Case, theory: str, height, depth):
+    """(wave, H, d) of the case's solitary wave for the references, or None without one."""
+    try:
+        H, d = _wave_of(case, height, depth)
+    except (CaseError, StopIteration):
+        return None
+    g = math.hypot(*case.context.g)
+    return registry.build("waveTheory", {"type": theory}).solitary(H, d, g=g), H, d
+
+
+def _save(fig, png: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    _pyplot().close(fig)
+    return png
+
+
+def plot_probes(case: Case, name: str, fo, wave, theory: str) -> Path | None:
+    """p, Ux, Uy at each probe against time; with a solitary wave, the theory's p, u, w at
+    the probe, z measured from the bottom of the first fluid region (crest aligned with the
+    first probe's pressure peak, the theory's celerity thereafter)."""
+    s = _series(case, name)
+    if s is None:
+        return None
+    cols, data, folder = s
+    plt = _pyplot()
+    pts = np.asarray(fo.coeffs.points, float)
+    t = data[:, 0]
+    fig, ax = plt.subplots(len(pts), 3, figsize=(12, 2.2 * len(pts) + 0.8), sharex=True,
+                           squeeze=False)
+    t_peak = None
+    region = next(iter(case.particles.fluid.values()))
+    bed = region.min[1] if hasattr(region, "min") else min(p[1] for p in region.points)
+    for k, (px, py) in enumerate(pts):
+        vals = data[:, 1 + 3 * k:4 + 3 * k]
+        if wave is not None and t_peak is None and np.isfinite(vals[:, 0]).any():
+            t_peak, x_peak = t[int(np.nanargmax(vals[:, 0]))], px
+        for j, (q, unit) in enumerate((("p", "Pa"), ("Ux", "m/s"), ("Uy", "m/s"))):
+            a = ax[k, j]
+            a.plot(t, vals[:, j], "b-", lw=1, label="sphfoam")
+            if wave is not None and t_peak is not None:
+                tt = t - t_peak - (px - x_peak) / wave[0].c
+                x = np.full_like(t, px)
+                z = np.full_like(t, py - bed)
+                ref = {"p": wave[0].p, "Ux": wave[0].u, "Uy": wave[0].w}[q](x, z, t=tt, x0=px)
+                a.plot(t, ref, "k--", lw=1, label=f"{theory}, H = {wave[1]:g} m")
+            a.set_ylabel(f"{q} ({unit})")
+            a.grid(alpha=0.3)
+            if j == 0:
+                a.set_title(f"probe ({px:g}, {py:g})", fontsize=9, loc="left")
+    ax[0, 0].legend(fontsize=8)
+    for a in ax[-1]:
+        a.set_xlabel("t (s)")
+    fig.suptitle(f"{case.name}: {name} (probes)" + ("" if wave else ", no reference (no "
+                                                   "solitary wave in the case)"))
+    return _save(fig, folder / f"{name}.png")
+
+
+def plot_lines(case: Case, name: str, fo, wave, theory: str, n_times: int = 6) -> Path | None:
+    """Ux(y) along each line at up to ``n_times`` sampled times; a line that follows the
+    crest is drawn against the theory's u(z) under the crest."""
+    from sphfoam.models.metrics import read_table, start_folders
+
+    files = []
+    for _, folder in start_folders(case.path, name):
+        for sub in folder.iterdir():
+            if (sub / "line.dat").is_file():
+                try:
+                    files.append((float(sub.name), sub / "line.dat"))
+                except ValueError:
+                    continue
+    if not files:
+        return None
+    files.sort()
+    pick = np.unique(np.linspace(0, len(files) - 1, min(n_times, len(files))).round().astype(int))
+    plt = _pyplot()
+    fig, ax = plt.subplots(1, 2, figsize=(11, 5))
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for i, k in enumerate(pick):
+        t, f = files[k]
+        cols, d = read_table(f)
+        col = colours[i % len(colours)]
+        for j in range(0, len(cols), 4):
+            tag = cols[j][1:] if len(cols) > 4 else ""
+            ax[0].plot(d[:, j + 1], d[:, j], "o-", ms=3, lw=0.8, color=col,
+                       label=f"t = {t:g} s{(' x' + tag) if tag else ''}")
+            ax[1].plot(d[:, j + 3], d[:, j], "o-", ms=3, lw=0.8, color=col)
+    crest = fo.coeffs.follow == "crest"
+    if wave is not None and crest:
+        w, H, d = wave
+        z = np.linspace(0.0, d + H, 60)
+        y = fo.coeffs.y0 + z
+        ax[0].plot(w.u(0.0, z), y, "k--", lw=1.2, label=f"{theory} under the crest")
+        ax[1].plot(w.p(0.0, z), y, "k--", lw=1.2)
+    ax[0].set(xlabel="Ux (m/s)", ylabel="y (m)")
+    ax[1].set(xlabel="p (Pa)", ylabel="y (m)")
+    for a in ax:
+        a.grid(alpha=0.3)
+    ax[0].legend(fontsize=8)
+    where = "under the crest" if crest else "at x = " + ", ".join(f"{x:g}" for x in fo.coeffs.x)
+    fig.suptitle(f"{case.name}: {name} (lines {where})")
+    return _save(fig, files[-1][1].parent.parent / f"{name}.png")
+
+
+def run_up_reference(mode: str, A: float, d: float, angle: float | None = None):
+    """[(label, R)] of the maximum run-up of a solitary wave of height A in depth d: on a
+    vertical wall, linear theory 2A and the second-order 2A + A^2/(2d) (Su & Mirie 1980);
+    on a plane beach, Synolakis (1987) R/d = 2.831 sqrt(cot beta) (A/d)^(5/4) (non-breaking)."""
+    if mode == "wall":
+        return [("linear theory, 2A", 2.0 * A),
+                ("Su & Mirie (1980), 2A + A²/2d", 2.0 * A + A * A / (2.0 * d))]
+    if angle and angle > 0:
+        cot = 1.0 / math.tan(math.radians(angle))
+        return [("Synolakis (1987), non-breaking", 2.831 * d * math.sqrt(cot) * (A / d) ** 1.25)]
+    return []
+
+
+def plot_run_up(case: Case, name: str, fo, wave) -> Path | None:
+    """R(t) and its running maximum against the maximum run-up of theory."""
+    s = _series(case, name)
+    if s is None:
+        return None
+    cols, data, folder = s
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    ax.plot(data[:, 0], data[:, 1], "b-", lw=1, label="run-up R(t)")
+    ax.plot(data[:, 0], data[:, 2], "b:", lw=1, label="running maximum")
+    if wave is not None:
+        for (label, R), ls in zip(run_up_reference(fo.coeffs.mode, wave[1], wave[2],
+                                                   fo.coeffs.angle), ("k--", "k-.")):
+            ax.axhline(R, color="k", ls=ls[1:], lw=1, label=f"{label} = {R:.4g} m")
+    ax.set(xlabel="t (s)", ylabel="R (m)", title=f"{case.name}: {name} (runUp, "
+           f"{fo.coeffs.mode})")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(fig, folder / f"{name}.png")
+
+
+def plot_crest(case: Case, name: str, fo, wave, theory: str) -> Path | None:
+    """x_c(t), eta_c(t) and c(t) against the theory's celerity and height."""
+    s = _series(case, name)
+    if s is None:
+        return None
+    cols, data, folder = s
+    t, xc, ec, c = data[:, 0], data[:, 1], data[:, 2], data[:, 3]
+    plt = _pyplot()
+    fig, ax = plt.subplots(1, 3, figsize=(13, 4))
+    ax[0].plot(t, xc, "b-", lw=1, label="sphfoam")
+    ax[1].plot(t, ec, "b-", lw=1)
+    ax[2].plot(t, c, "b-", lw=1)
+    fit = folder / "celerity.dat"
+    if fit.is_file():
+        from sphfoam.models.metrics import read_table
+
+        fc, fd = read_table(fit)
+        if fd.size and np.isfinite(fd[0, 0]):
+            cel, x0 = fd[0, 0], fd[0, 1]
+            ax[0].plot(t, x0 + cel * t, "g:", lw=1, label=f"fit, c = {cel:.4g} m/s")
+            ax[2].axhline(cel, color="g", ls=":", lw=1)
+    if wave is not None:
+        w, H, _ = wave
+        ok = np.isfinite(xc)
+        if ok.any():
+            i = int(np.flatnonzero(ok)[np.argmax(ec[ok])])
+            ax[0].plot(t, xc[i] + w.c * (t - t[i]), "k--", lw=1,
+                       label=f"{theory}, c = {w.c:.4g} m/s")
+        ax[1].axhline(H, color="k", ls="--", lw=1, label=f"H = {H:g} m")
+        ax[2].axhline(w.c, color="k", ls="--", lw=1)
+        ax[2].set_ylim(0.0, 2.0 * w.c)             # the start-up of a paddle wave is noise
+        ax[1].legend(fontsize=8)
+    ax[0].set(xlabel="t (s)", ylabel="x_c (m)", title="crest position")
+    ax[1].set(xlabel="t (s)", ylabel="eta_c (m)", title="crest height")
+    ax[2].set(xlabel="t (s)", ylabel="c (m/s)", title="celerity")
+    for a in ax:
+        a.grid(alpha=0.3)
+    ax[0].legend(fontsize=8)
+    fig.suptitle(f"{case.name}: {name} (crestTracker)")
+    return _save(fig, folder / f"{name}.png")
+
+
+def plot_dam_break(case: Case, name: str, fo) -> Path | None:
+    """Z(T) and H(T) against Martin & Moyce (1952) and Ritter's (1892) dry-bed front
+    Z = 1 + 2T (the front of the shallow-water solution runs at 2 sqrt(g H0))."""
+    from sphfoam.sampling.damBreak import martin_moyce
+
+    s = _series(case, name)
+    if s is None:
+        return None
+    cols, data, folder = s
+    T, Z, Hh = data[:, cols.index("T")], data[:, cols.index("Z")], data[:, cols.index("H")]
+    front, height = martin_moyce()
+    width = (fo.coeffs.width or fo.coeffs.H0) / fo.coeffs.H0
+    plt = _pyplot()
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    ax[0].plot(T, Z, "b-", label=f"sphfoam, dx = {case.particles.dx:g} m")
+    ax[0].plot(front[:, 0], front[:, 1], "k^", label="Martin & Moyce (1952)")
+    TT = np.linspace(0.0, max(float(T.max()), 0.1), 50)
+    ax[0].plot(TT, width + 2.0 * TT, "k:", label="Ritter (1892), Z = a/H0 + 2T")
+    ax[0].set(xlabel=r"$T = t\sqrt{g/H_0}$", ylabel=r"$Z = z/H_0$", title="surge front")
+    ax[1].plot(T, Hh, "b-", label="sphfoam")
+    ax[1].plot(height[:, 0], height[:, 1], "k^", label="Martin & Moyce (1952)")
+    ax[1].set(xlabel=r"$T = t\sqrt{g/H_0}$", ylabel=r"$H = h/H_0$", title="residual height")
+    for a in ax:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
+    fig.suptitle(f"{case.name}: {name} (damBreakFront)")
+    return _save(fig, folder / f"{name}.png")
+
+
+def plot_profile(case: Case, name: str, fo) -> Path | None:
+    """u(y) at each sampled time (markers) against its theory column (lines), from the
+    velocityProfile table."""
+    s = _series(case, name)
+    if s is None:
+        return None
+    cols, data, folder = s
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    y = data[:, 0]
+    k = 0
+    for j, c in enumerate(cols):
+        if c.startswith("u("):
+            col = colours[k % len(colours)]
+            k += 1
+            ax.plot(data[:, j], y, "o", ms=3.5, color=col, label=f"SPH, t = {c[2:-1]} s")
+            th = f"theory({c[2:-1]})"
+            if th in cols:
+                ax.plot(data[:, cols.index(th)], y, "-", lw=1.2, color=col)
+    if any(c.startswith("theory(") for c in cols):
+        ax.plot([], [], "k-", label=f"theory ({fo.coeffs.theory})")
+    ax.set(xlabel="u_x (m/s)", ylabel="y (m)", title=f"{case.name}: {name} (velocityProfile)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(fig, folder / f"{name}.png")
+
+
+def plot_case(case_dir, names: list[str] | None = None, theory: str = "mcCowan",
+              height: float | None = None, depth: float | None = None, log=print) -> list[Path]:
+    """One PNG per function object of the case (or those ``names``) against its reference,
+    in its latest ``postProcessing/<name>/<startTime>/``; returns the files written. Objects
+    with no output yet are skipped (an error when named, or when nothing is drawn)."""
+    case = Case(case_dir)
+    functions = case.models.functions
+    if names:
+        unknown = [n for n in names if n not in functions]
+        if unknown:
+            raise CaseError.single("system/controlDict", f"functions.{unknown[0]}",
+                                   "no such function object; defined: "
+                                   + (", ".join(functions) or "(none)"))
+        functions = {n: functions[n] for n in names}
+    if not functions:
+        raise CaseError.single("system/controlDict", "functions", "no function objects to plot")
+    wave = _reference_wave(case, theory, height, depth)
+    out, missing, failed = [], [], []
+    for name, fo in functions.items():
+        kind = fo.name
+        if kind == "waveGauges":
+            if _series(case, name) is None:
+                missing.append(name)
+                continue
+            try:
+                png, _ = plot_gauges(case.path, theory, name, height, depth, log=log)
+            except CaseError as e:             # output but no wave: the gauges need one
+                failed.extend(e.problems)
+                continue
+            out.append(png)
+            continue
+        if kind == "probes":
+            png = plot_probes(case, name, fo, wave, theory)
+        elif kind == "lines":
+            png = plot_lines(case, name, fo, wave, theory)
+        elif kind == "runUp":
+            png = plot_run_up(case, name, fo, wave)
+        elif kind == "crestTracker":
+            png = plot_crest(case, name, fo, wave, theory)
+        elif kind == "damBreakFront":
+            png = plot_dam_break(case, name, fo)
+        elif kind == "velocityProfile":
+            png = plot_profile(case, name, fo)
+        else:                                  # a type plot does not know: say so
+            log(f"{name}: no plot for function objects of type {kind}")
+            continue
+        if png is None:
+            missing.append(name)
+        else:
+            out.append(png)
+            log(f"{name}: {png.relative_to(case.path)}")
+    problems = list(failed)
+    if missing:
+        problems.append(Problem(str(case.path), "", "no output of " + ", ".join(missing)
+                                + ": run the case or `sphfoam sample` first"))
+    if problems and (names or not out):
+        raise CaseError(problems)
+    for p in problems:
+        log(f"not plotted: {p}")
+    return out

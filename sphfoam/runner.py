@@ -175,19 +175,22 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
 
 
 def run_case(case: Case | str | Path, *, progress: bool = True, echo=print,
-             end_time: float | None = None) -> RunReport:
-    """Run a case from its start time to endTime (or ``end_time``)."""
+             end_time: float | None = None, console=None) -> RunReport:
+    """Run a case from its start time to endTime (or ``end_time``). ``console``: the rich
+    console the progress bar draws on; give ``echo`` that prints on the same console so
+    log lines appear above the bar instead of being glued to it."""
     case = case if isinstance(case, Case) else Case(case)
     case.validate()
     c = case.control
     log = Log(case.path / "log.sphfoam", echo)
     try:
-        return _run(case, c, log, progress, end_time if end_time is not None else c.endTime)
+        return _run(case, c, log, progress, end_time if end_time is not None else c.endTime,
+                    console)
     finally:
         log.close()
 
 
-def _run(case, c, log, progress, t_end) -> RunReport:
+def _run(case, c, log, progress, t_end, console=None) -> RunReport:
     log(f"sphfoam {__version__}: case {case.path}")
     folder = start_folder(case)
     if folder is None:
@@ -228,7 +231,7 @@ def _run(case, c, log, progress, t_end) -> RunReport:
     writes = write_schedule(c)
     health = Schedule("everyStep")
     eps = 1e-9 * max(c.writeInterval, 1e-300)
-    bar = _Progress(progress, t0, t_end, state.n)
+    bar = _Progress(progress, t0, t_end, state.n, console)
     wall0 = wallclock.perf_counter()
     stop = _StopRequest()
     try:
@@ -363,38 +366,52 @@ class _StopRequest:
 
 
 class _Progress:
-    """A rich progress bar: sim time, step, dt, steps/s, particles, ETA."""
+    """A rich progress bar: sim time, step, dt, steps/s, particles, ETA. It draws on
+    ``console`` (rich's own by default); log lines printed on that console while it runs go
+    above it. Updates are throttled to 5 a second; :meth:`close` draws the final state (100 %
+    at the end time) before the bar stops."""
 
-    def __init__(self, enabled, t0, t_end, n):
+    def __init__(self, enabled, t0, t_end, n, console=None):
         self.enabled = enabled
         self.t0, self.t_end = t0, t_end
         self.last = 0.0
         if not enabled:
             return
-        from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
-                                   TimeRemainingColumn)
+        from rich.progress import (BarColumn, Progress, TaskProgressColumn, TextColumn,
+                                   TimeElapsedColumn, TimeRemainingColumn)
 
         self.p = Progress(TextColumn("[bold]t = {task.fields[t]:.5g} s"), BarColumn(),
+                          TaskProgressColumn(),
                           TextColumn("step {task.fields[step]}  dt {task.fields[dt]:.3g} s  "
                                      "{task.fields[rate]:.0f} steps/s  {task.fields[n]} particles"),
-                          TimeElapsedColumn(), TimeRemainingColumn())
+                          TimeElapsedColumn(), TimeRemainingColumn(), console=console)
         self.p.start()
-        self.task = self.p.add_task("run", total=max(t_end - t0, 1e-300), t=t0, step=0,
+        self.total = max(t_end - t0, 1e-300)
+        self.task = self.p.add_task("run", total=self.total, t=t0, step=0,
                                     dt=0.0, rate=0.0, n=n)
         self.w0 = wallclock.perf_counter()
         self.steps = 0
+        self.state = None
+
+    def _fields(self, sim, dt, now):
+        done = self.total if sim.time >= self.t_end * (1 - 1e-12) else sim.time - self.t0
+        return dict(completed=min(done, self.total), t=sim.time, step=sim.step_index, dt=dt,
+                    rate=self.steps / max(now - self.w0, 1e-9), n=sim.state.n)
 
     def update(self, sim, dt):
         if not self.enabled:
             return
         self.steps += 1
+        self.state = (sim, dt)
         now = wallclock.perf_counter()
         if now - self.last < 0.2:
             return
         self.last = now
-        self.p.update(self.task, completed=sim.time - self.t0, t=sim.time, step=sim.step_index,
-                      dt=dt, rate=self.steps / max(now - self.w0, 1e-9), n=sim.state.n)
+        self.p.update(self.task, **self._fields(sim, dt, now))
 
     def close(self):
         if self.enabled:
+            if self.state is not None:
+                self.p.update(self.task, **self._fields(*self.state, wallclock.perf_counter()))
+            self.p.refresh()
             self.p.stop()

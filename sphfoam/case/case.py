@@ -25,8 +25,8 @@ from pydantic import ValidationError
 from sphfoam import registry
 from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
-from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, ParticleDict, SphSchemes,
-                                  TransportProperties, WaveProperties)
+from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, MeshWalls, ParticleDict,
+                                  SphSchemes, TransportProperties, WaveProperties)
 from sphfoam.context import CaseContext
 
 FILES = {
@@ -95,7 +95,20 @@ class Case:
 
     @cached_property
     def particles(self) -> ParticleDict:
-        return self._validated("particleDict")
+        pd = self._validated("particleDict")
+        problems = []
+        for name, wall in pd.walls.items():
+            if isinstance(wall, MeshWalls):          # read the mesh file of a `type mesh` wall
+                from sphfoam.setup.meshwalls import MeshWallError
+
+                try:
+                    wall.load(self.path)
+                except MeshWallError as e:
+                    problems.append(Problem(FILES["particleDict"][0], f"walls.{name}.file",
+                                            str(e)))
+        if problems:
+            raise CaseError(problems)
+        return pd
 
     @cached_property
     def transport(self) -> TransportProperties:

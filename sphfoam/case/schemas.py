@@ -10,7 +10,8 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, field_validator,
+                      model_validator)
 
 from sphfoam.case.foamdict import DimensionSet
 
@@ -258,7 +259,47 @@ class SlopeWalls(_Wall):
     velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
 
 
-WallRegion = Annotated[BoxWalls | PolylineWalls | SlopeWalls, Field(discriminator="type")]
+class MeshWalls(_Wall):
+    """Wall rows along the lines of a mesh file read with meshio (sphfoam.setup.meshwalls):
+    its line cells, the section of its surface (STL, OBJ, VTK, Gmsh triangles or quads) by the
+    plane z = ``z``, or the boundary of a flat surface mesh; the solid lies behind the faces
+    (their normals point into the fluid) or on ``side`` of the line cells."""
+
+    type: Literal["mesh"]
+    file: str = Field(description="mesh file, relative to the case directory (e.g. "
+                      "`\"constant/geometry/obstacle.stl\"`): any format meshio reads")
+    layers: int = Field(3, ge=1, le=10, description="rows of wall particles")
+    side: Literal["left", "right"] = Field("right", description=(
+        "where the solid lies: line cells, on this side of their direction; surfaces, "
+        "`right` behind the faces (their normals point into the fluid), `left` in front"))
+    z: float = Field(0.0, description="height of the cutting plane through a surface, in the "
+                     "file's units")
+    scale: float = Field(1.0, gt=0, description="factor on the file's coordinates, e.g. 0.001 "
+                         "for a CAD file in mm")
+    translate: Vector2 = Field((0.0, 0.0), description="shift (m) added after scaling")
+    velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
+    _polylines: list | None = PrivateAttr(None)
+
+    def load(self, case_dir) -> None:
+        """Read the mesh (relative to ``case_dir``); raises MeshWallError with the reason."""
+        from pathlib import Path
+
+        from sphfoam.setup.meshwalls import read_mesh_walls
+
+        f = Path(self.file)
+        self._polylines = read_mesh_walls(f if f.is_absolute() else Path(case_dir) / f,
+                                          z=self.z, scale=self.scale, translate=self.translate)
+
+    @property
+    def polylines(self) -> list[list[tuple[float, float]]]:
+        """The wall lines (solid on their right before ``side``), once :meth:`load` ran."""
+        if self._polylines is None:
+            raise RuntimeError(f"mesh wall {self.file}: load(case_dir) has not been called")
+        return self._polylines
+
+
+WallRegion = Annotated[BoxWalls | PolylineWalls | SlopeWalls | MeshWalls,
+                       Field(discriminator="type")]
 
 
 class Domain(Strict):

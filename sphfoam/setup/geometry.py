@@ -1,6 +1,7 @@
 """Wall geometry of ``system/particleDict`` as straight segments with normals.
 
-Every wall entry (a tank ``box``, a ``polyline`` or a ``slope``) becomes a list of
+Every wall entry (a tank ``box``, a ``polyline``, a ``slope`` or the lines of a ``mesh`` file,
+sphfoam.setup.meshwalls) becomes a list of
 :class:`Segment` s whose unit normal points *into the fluid*. The boundary models use them in
 two ways: particle boundaries (repulsive, stationary ghosts, hybrid) place wall particles along
 them and store, per wall particle, the normal of the nearest wall point, its distance behind
@@ -15,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphfoam.case.schemas import BoxWalls, ParticleDict, SlopeWalls
+from sphfoam.case.schemas import BoxWalls, MeshWalls, ParticleDict, SlopeWalls
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,8 @@ def polylines_of(region) -> list[tuple[list[tuple[float, float]], str]]:
         x0, y0 = region.start
         return [([(x0, y0), (x0 + region.length * math.cos(ang),
                              y0 + region.length * math.sin(ang))], "right")]
+    if isinstance(region, MeshWalls):
+        return [(list(pts), region.side) for pts in region.polylines]
     return [([tuple(p) for p in region.points], region.side)]
 
 
