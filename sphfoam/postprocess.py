@@ -67,7 +67,7 @@ def _wave_of(case: Case, height: float | None, depth: float | None):
         return height, depth
     for mot in case.models.motions.values():
         maker = getattr(mot, "maker", None)
-        if maker is not None and maker.name == "goring":
+        if maker is not None and maker.name in ("goring", "massFlux"):
             return height or maker.coeffs.height, depth or maker.coeffs.depth
     for w, _ in case.waves.values():
         region = next(iter(case.particles.fluid.values()))

@@ -315,7 +315,7 @@ def case_wave_height(case_path) -> float | None:
     try:
         for mot in case.models.motions.values():
             maker = getattr(mot, "maker", None)
-            if maker is not None and maker.name == "goring":
+            if maker is not None and maker.name in ("goring", "massFlux"):
                 return float(maker.coeffs.height)
         for w, _ in case.waves.values():
             return float(w.height)
