@@ -174,3 +174,55 @@ def test_massflux_bad_theory_is_a_clear_error():
 
     with pytest.raises(ValidationError, match="mcCowan"):
         maker(type="massFlux", height=0.1, depth=0.5, theory="mccowan")
+
+
+# --- Fenton's ninth order ---------------------------------------------------------------------
+def test_fenton_coefficients_reproduce_the_published_low_orders():
+    """Grimshaw (1971) / Fenton (1972): eta = eps S - 3/4 eps^2 S T^2 + eps^3 (5/8 S T^2 -
+    101/80 S^2 T^2), alpha = sqrt(3 eps/4)(1 - 5/8 eps + 71/128 eps^2 - 100627/179200 eps^3),
+    c/sqrt(g d) = 1 + eps/2 - 3/20 eps^2 + 3/56 eps^3 - 309/5600 eps^4 (T^2 = 1 - S)."""
+    from fractions import Fraction as Fr
+
+    from sphfoam.models import fenton_coeffs as fc
+
+    eta = {k: Fr(v) for k, v in fc.ETA.items()}
+    assert [eta[(1, 1)]] == [1]
+    assert [eta[(2, 1)], eta[(2, 2)]] == [Fr(-3, 4), Fr(3, 4)]
+    assert [eta[(3, 1)], eta[(3, 2)], eta[(3, 3)]] == [Fr(5, 8), -Fr(5, 8) - Fr(101, 80),
+                                                       Fr(101, 80)]
+    assert [Fr(a) for a in fc.ALPHA[:4]] == [1, Fr(-5, 8), Fr(71, 128), Fr(-100627, 179200)]
+    assert [Fr(c) for c in fc.C[:5]] == [1, Fr(1, 2), Fr(-3, 20), Fr(3, 56), Fr(-309, 5600)]
+    for i in range(2, 10):                      # the crest is at eta = A: sum_j a_ij = 0
+        assert sum(eta[(i, j)] for j in range(1, i + 1)) == 0
+
+
+def test_fenton_converges_to_the_exact_wave_at_ninth_order():
+    """Fenton against the exact wave: c within 1e-11 at A/d = 0.1 and 2e-7 at 0.3 (relative),
+    eta within 1e-9 d at 0.1; the celerity error falls ~2^10 from eps = 0.1 to 0.05."""
+    err = {}
+    for eps in (0.05, 0.1, 0.3):
+        f, e = wave("fenton", eps), wave("euler", eps)
+        err[eps] = abs(f.c / e.c - 1)
+        x = np.linspace(-10, 10, 41) / e.decay
+        deta = np.max(np.abs(f.eta(x) - e.eta(x)))
+        z = 0.5 * (1 + e.eta(x))
+        du = np.max(np.abs(f.u(x, z) - e.u(x, z))) / math.sqrt(G)
+        dp = np.max(np.abs(f.p(x, z) - e.p(x, z))) / (1000 * G)
+        if eps == 0.1:
+            assert err[eps] < 1e-11 and deta < 1e-9 and du < 1e-8 and dp < 1e-8
+        if eps == 0.3:
+            assert err[eps] < 2e-7 and deta < 1e-5 and du < 1e-4 and dp < 2e-4
+    assert err[0.1] / err[0.05] > 2**9
+    assert wave("fenton", 0.3).eta(0.0) == pytest.approx(0.3, rel=1e-14)
+
+
+def test_fenton_surface_conditions_to_order():
+    """Kinematic and Bernoulli residuals at the surface are O(eps^10): < 1e-8 at eps = 0.1."""
+    w = wave("fenton", 0.1)
+    x = np.linspace(-12, 12, 121) / w.decay
+    zs = 1 + w.eta(x)
+    h = 1e-5
+    deta = (w.eta(x + h) - w.eta(x - h)) / (2 * h)
+    assert np.max(np.abs((w.u(x, zs) - w.c) * deta - w.w(x, zs))) < 1e-8 * math.sqrt(G)
+    assert np.max(np.abs(w.p(x, zs))) < 1e-8 * 1000 * G
+    assert np.max(np.abs(w.w(x, 0.0))) == 0.0
