@@ -226,3 +226,24 @@ def test_fenton_surface_conditions_to_order():
     assert np.max(np.abs((w.u(x, zs) - w.c) * deta - w.w(x, zs))) < 1e-8 * math.sqrt(G)
     assert np.max(np.abs(w.p(x, zs))) < 1e-8 * 1000 * G
     assert np.max(np.abs(w.w(x, 0.0))) == 0.0
+
+
+def test_initial_condition_fields_from_the_new_theories():
+    """constant/waveProperties with theory euler or fenton: the set-up's u, v, p (setup.waves)
+    agree with each other to 1e-4 of sqrt(g d) and rho g d at A/d = 0.3 in d = 10 m."""
+    from types import SimpleNamespace
+
+    from sphfoam.setup.waves import fields, surface
+
+    w = SimpleNamespace(height=3.0, x0=20.0, direction=-1)
+    x = np.repeat(np.linspace(-30, 70, 25), 8)
+    y = np.tile(np.linspace(0.5, 9.5, 8), 25)
+    out = {}
+    for name in ("euler", "fenton"):
+        mdl = registry.build("waveTheory", {"type": name})
+        out[name] = fields(x, y, 0.0, 10.0, [(w, mdl)], G, 1000.0)
+        assert surface(np.array([20.0]), 10.0, [(w, mdl)], G)[0] == pytest.approx(3.0, rel=1e-12)
+    for a, b, scale in zip(out["euler"], out["fenton"], (math.sqrt(G * 10), math.sqrt(G * 10),
+                                                         1000 * G * 10)):
+        assert np.max(np.abs(a - b)) < 1e-4 * scale
+    assert np.min(out["euler"][0]) < -0.5                     # travelling to -x

@@ -166,7 +166,7 @@ class EulerSolution:
         Y = np.fft.rfft(y) / N
         a = 2.0 * Y.real[1:]
         a[-1] *= 0.5                                  # Nyquist mode counted once
-        keep = np.flatnonzero(np.abs(a) > 1e-16 * eps)
+        keep = np.flatnonzero(np.abs(a) > 1e-17)
         m = keep[-1] + 1 if keep.size else 1
         self.a = a[:m]
         self.km = grid.k[1:m + 1].copy()
@@ -178,26 +178,27 @@ class EulerSolution:
         self._ya = ya
 
     # --- the map and its inverse ------------------------------------------------------------
-    def _terms(self, zeta):
-        """sin(k (zeta + i d'))/sinh(k d') and k cos(k (zeta + i d'))/sinh(k d') per mode
-        (shape (points, modes)), in an overflow-free form."""
-        k, dp = self.km[None, :], self.dp
-        al = zeta.real[:, None]
-        b = zeta.imag[:, None] + dp                    # beta + d' in [0, d'] (a bit above)
-        # sinh(k b)/sinh(k d') and cosh(k b)/sinh(k d') = e^{k (b - d')} (1 -+ e^{-2kb})/(1 - e^{-2kd'})
-        e = np.exp(k * (b - dp)) / (1.0 - np.exp(-2.0 * k * dp))
-        sh = e * (1.0 - np.exp(-2.0 * k * b))
-        ch = e * (1.0 + np.exp(-2.0 * k * b))
-        s, c = np.sin(k * al), np.cos(k * al)
-        f = s * ch + 1j * c * sh                       # sin(k (zeta + i d'))/sinh(k d')
-        fp = k * (c * ch - 1j * s * sh)                # d/dzeta of it
-        return f, fp
-
     def z_of(self, zeta):
-        f, fp = self._terms(zeta)
-        z = zeta + 1j * self.mean + f @ self.a
-        dz = 1.0 + fp @ self.a
+        """z(zeta) = zeta + i <eta~> + sum a_m sin(k_m w)/sinh(k_m d') and dz/dzeta, w = zeta +
+        i d', with sin(k_m w)/sinh(k_m d') = i r^m (1 - q^2m)/(1 - e^(-2 k_m d')) and k_m
+        cos(k_m w)/sinh(k_m d') = k_m r^m (1 + q^2m)/(1 - e^(-2 k_m d')), r = e^(-i dk zeta),
+        q = e^(i dk w): |r|, |q| <= 1 in the fluid (no overflow), powers by cumulative products
+        (k_m = m dk)."""
+        dk = self.km[0]
+        m = self.km.size
+        R = np.cumprod(np.broadcast_to(np.exp(-1j * dk * zeta)[:, None], (zeta.size, m)), axis=1)
+        RQ = R * np.cumprod(np.broadcast_to(np.exp(2j * dk * (zeta + 1j * self.dp))[:, None],
+                                            (zeta.size, m)), axis=1)
+        c1, c2 = self._c12
+        # elementwise sums, not BLAS: its threads contend on a loaded machine
+        z = zeta + 1j * self.mean + 1j * ((R - RQ) * c1).sum(axis=1)
+        dz = 1.0 + ((R + RQ) * c2).sum(axis=1)
         return z, dz
+
+    @functools.cached_property
+    def _c12(self):
+        den = 1.0 - np.exp(-2.0 * self.km * self.dp)
+        return (self.a / den).astype(complex), (self.a * self.km / den).astype(complex)
 
     def zeta_of(self, x, y):
         """zeta with z(zeta) = x + i y for |x| < L/2, by Newton from the surface guess."""
@@ -224,11 +225,11 @@ class EulerSolution:
         k, ac = self.km[None, :], (self.a / np.tanh(self.km * self.dp))
         for _ in range(50):
             s, c = np.sin(k * al[:, None]), np.cos(k * al[:, None])
-            step = (al + s @ ac - x) / (1.0 + c @ (ac * self.km))
+            step = (al + (s * ac).sum(axis=1) - x) / (1.0 + (c * (ac * self.km)).sum(axis=1))
             al = al - step
             if np.max(np.abs(step), initial=0.0) < 1e-14:
                 break
-        return self.mean + np.cos(k * al[:, None]) @ self.a
+        return self.mean + (np.cos(k * al[:, None]) * self.a).sum(axis=1)
 
     @functools.cached_property
     def _table(self):
