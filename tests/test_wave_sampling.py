@@ -358,3 +358,102 @@ def test_crest_of_sampled_surface():
     assert waves.crest(g, np.zeros_like(g)) == (0.0, 0.0)       # flat: no crest to refine
     assert waves.fit_celerity([0.0, 1.0, 2.0], [1.0, 2.5, 4.0])[:2] == pytest.approx((1.5, 1.0))
     assert np.isnan(waves.fit_celerity([1.0], [2.0])[0])
+
+
+# --- sub-particle surface: fluid fraction 1/2 (issue 13) ----------------------------------------
+KERNELS = [CubicSpline(), Gaussian(), Quintic(), WendlandC2()]
+
+
+def columns(surface, length=6.0, dx=DX):
+    """``stretched`` with each particle's volume dx * (S/n), as the set-up gives them."""
+    xc = (np.arange(int(round(length / dx))) + 0.5) * dx
+    s = surface(xc)
+    n = np.rint(s / dx).astype(int)
+    j = np.concatenate([np.arange(m) for m in n])
+    dy = np.repeat(s / n, n)
+    return np.repeat(xc, n), (j + 0.5) * dy, dx * dy
+
+
+SURFACES = {
+    "flat": lambda s: np.full_like(s, D + 0.0123),                       # off the lattice
+    "sloped": lambda s: D + 0.05 * s,
+    "sine": lambda s: D + 0.1 * np.sin(2 * np.pi * s / 1.5),
+    "solitary": lambda s: D + eta_sech2(s, 3.0),
+}
+
+
+@pytest.mark.parametrize("kernel", KERNELS, ids=lambda k: k.name)
+@pytest.mark.parametrize("shape", list(SURFACES))
+def test_fraction_surface_is_sub_particle(kernel, shape):
+    """Where sum_b V_b W crosses 1/2 is the surface to <= 0.1 dx (measured: <= 0.03 dx, the
+    sine's curvature and the kernel sum's lattice error), away from the set's ends."""
+    S = SURFACES[shape]
+    x, y, v = columns(S)
+    g = np.linspace(1.0, 5.0, 161)
+    h = kernel.coeffs.hdx * DX
+    eta = waves.fraction_surface(x, y, v, g, kernel, h, DX, still=D)
+    assert np.max(np.abs(eta - (S(g) - D))) <= 0.1 * DX
+
+
+def test_fraction_surface_with_disordered_particles():
+    """Particles jittered by up to +-0.1 dx about the columns (the top ones move the surface
+    they stand for by as much): within 0.15 dx (measured 0.10 dx)."""
+    x, y, v = columns(SURFACES["sine"])
+    rng = np.random.default_rng(7)
+    x = x + rng.uniform(-0.1, 0.1, x.size) * DX
+    y = y + rng.uniform(-0.1, 0.1, y.size) * DX
+    k = CubicSpline()
+    g = np.linspace(1.0, 5.0, 81)
+    eta = waves.fraction_surface(x, y, v, g, k, 1.3 * DX, DX, still=D)
+    assert np.max(np.abs(eta - (SURFACES["sine"](g) - D))) <= 0.15 * DX
+
+
+def test_fraction_surface_no_fluid_is_nan():
+    x, y, v = columns(SURFACES["flat"], length=1.0)
+    eta = waves.fraction_surface(x, y, v, [0.5, 3.0], CubicSpline(), 1.3 * DX, DX)
+    assert np.isfinite(eta[0]) and np.isnan(eta[1])
+    assert np.isnan(waves.fraction_surface([], [], [], [0.5], CubicSpline(), 1.3 * DX, DX)[0])
+
+
+def test_fraction_run_up_on_the_wall():
+    """Mirrored across the wall, the 1/2 crossing on it is the contact height:
+    still water reads its level, a column piled against the wall its top, to 0.1 dx."""
+    k, h = CubicSpline(), 1.3 * DX
+    wall = 2.0
+    x, y, v = columns(lambda s: np.full_like(s, D + 0.0123), length=wall)
+    assert waves.fraction_wall_run_up(x, y, v, wall, k, h, DX, still=D) == \
+        pytest.approx(0.0123, abs=0.1 * DX)
+    x2, y2, v2 = columns(lambda s: D + 0.1 * s / wall, length=wall)      # rising to the wall
+    assert waves.fraction_wall_run_up(x2, y2, v2, wall, k, h, DX, still=D) == \
+        pytest.approx(0.1, abs=0.1 * DX)
+    assert np.isnan(waves.fraction_wall_run_up(x, y, v, wall + 1.0, k, h, DX))
+    # a beach's shoreline (a layer thinner than the kernel) is refused with a clear message
+    with pytest.raises(Exception, match="mode wall only"):
+        build("type runUp; mode beach; start (1 0); angle 10; surface fraction;")
+
+
+def test_fraction_mode_in_the_objects(tmp_path):
+    """waveGauges, crestTracker and runUp with ``surface fraction``; the default stays the
+    thesis's particle gauge."""
+    case, ctx = fake_case(tmp_path)
+    assert build("type waveGauges; x (1);").coeffs.surface == "particle"
+    with pytest.raises(Exception, match="fraction"):
+        build("type waveGauges; x (1); surface fractions;")
+    x0 = 10.0
+    x, y, v = columns(lambda s: D + eta_sech2(s, x0), length=20.0)
+    sim = FakeSim(x, y)
+    sim.state.m[:] = sim.state.rho * v                        # V_b = m_b / rho_b
+    fo = build("type waveGauges; x (5 9.5 10 12.25); still 1; surface fraction;")
+    fo.start(case, ctx, "0")
+    fo.execute(sim)
+    fo.end()
+    _, _, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    np.testing.assert_allclose(data[0, 1:], eta_sech2([5, 9.5, 10, 12.25], x0), atol=0.1 * DX)
+    ct = build("type crestTracker; xMin 2; xMax 18; still 1; surface fraction;")
+    ct.start(case, ctx, "0")
+    xc, ec = ct.measure(sim.state.x, sim.state.y, v)
+    assert xc == pytest.approx(x0, abs=0.1 * DX) and ec == pytest.approx(A, abs=0.1 * DX)
+    ru = build(f"type runUp; mode wall; x 20; still {D}; surface fraction;")
+    ru.start(case, ctx, "0")
+    assert ru.measure(sim.state.x, sim.state.y, v) == pytest.approx(
+        eta_sech2(20.0, x0), abs=0.1 * DX)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
+from scipy.optimize import brentq
 
 from sphfoam.models.wavemakers import WaveMaker
 from sphfoam.registry import Coeffs, register
@@ -117,3 +118,95 @@ class Goring(WaveMaker):
         xi = np.asarray(X, float) + self.xi0
         tp = self._tp(np.asarray(t, float))
         return xi - self.amplitude * np.tanh(self.kappa * (self.celerity * tp - xi))
+
+
+@register
+class MassFluxPaddle(WaveMaker):
+    """A piston paddle for any solitary-wave theory, by default the exact wave: the paddle
+    moves with the wave's depth-mean velocity, dX/dt = U = c eta(s)/(d + eta(s)), the mass
+    flux of the wave over the local depth (Goring's T(4.17) with the theory's own eta and c
+    in place of Boussinesq's T(4.5)).  With s = c t' - X the distance of the crest beyond the
+    paddle, ds/dt' = c d/(d + eta(s)), which integrates to the explicit parametric trajectory
+    X(s) = (1/d) int_0^s eta,   t'(s) = (s + X(s))/c,
+    so the stroke is the wave's volume / d (about 1.79 d at H/d = 0.5 for the exact wave,
+    against Goring's sqrt(16 H d/3) = 1.63 d).  The motion is cut, as Goring's T(4.24), where
+    X reaches ``fraction`` of the half-stroke either side of the crest; the paddle rests at
+    X = 0 until ``delay``, the crest passes its mean position at delay + duration/2, and it
+    then rests at X = ``travel`` = fraction x stroke.  With ``theory boussinesq`` the
+    trajectory is Goring's T(4.20) exactly."""
+
+    name = "massFlux"
+    doc = "piston paddle moving with a solitary wave's depth-mean velocity c eta/(d + eta) " \
+          "(stroke = volume/d), default the exact wave; Goring T(4.17) generalised"
+
+    class Coeffs(Coeffs):
+        height: float = Field(gt=0, description="solitary wave height H (m)")
+        depth: float = Field(gt=0, description="still water depth d (m)")
+        theory: str = Field("euler", description=(
+            "the wave theory whose eta and c drive the paddle (sphfoam models waveTheory)"))
+        fraction: float = Field(0.999, gt=0.5, lt=1.0, description=(
+            "the motion runs while X is within this fraction of the half-stroke either side "
+            "of the crest (0.999 as Goring's T(4.24))"))
+        delay: float = Field(0.0, ge=0, description="time (s) at which the paddle starts")
+        g: float = Field(9.81, gt=0, description="gravitational acceleration (m/s^2)")
+
+        @field_validator("theory")
+        @classmethod
+        def _theory(cls, v):
+            from sphfoam import registry
+
+            if v not in registry.names("waveTheory"):
+                raise ValueError(str(registry.UnknownModel("waveTheory", v,
+                                                           registry.names("waveTheory"))))
+            return v
+
+    def __init__(self, coeffs=None):
+        from scipy.integrate import cumulative_simpson
+        from scipy.interpolate import CubicSpline
+
+        from sphfoam import registry
+
+        super().__init__(coeffs)
+        c = self.coeffs
+        wave = registry.build("waveTheory", {"type": c.theory}).solitary(c.height, c.depth,
+                                                                         g=c.g)
+        self.wave, self.celerity = wave, wave.c
+        L = 40.0 / wave.decay
+        s = np.linspace(-L, L, 4001)
+        eta = wave.eta(s)
+        X = cumulative_simpson(eta, x=s, initial=0.0) / c.depth
+        X -= np.interp(0.0, s, X)                                        # X(0) = 0 at the crest
+        self.stroke = float(X[-1] - X[0])                                 # volume / d
+        half = 0.5 * c.fraction * self.stroke
+        tp = (s + X) / self.celerity                                      # t'(s)
+        self._X_of_t = CubicSpline(tp, X)
+        self._s_of_t = CubicSpline(tp, s)
+        t_lo = brentq(lambda t: float(self._X_of_t(t)) + half, tp[0], 0.0, xtol=1e-14)
+        t_hi = brentq(lambda t: float(self._X_of_t(t)) - half, 0.0, tp[-1], xtol=1e-14)
+        self._t0, self.duration = t_lo, t_hi - t_lo
+        self.x0 = float(self._X_of_t(t_lo))
+        self.travel = float(self._X_of_t(t_hi)) - self.x0
+
+    def solitary_wave(self) -> tuple[float, float]:
+        return float(self.coeffs.height), float(self.coeffs.depth)
+
+    def _tp(self, t):
+        return np.asarray(t, float) - self.coeffs.delay + self._t0
+
+    def position(self, t):
+        """X(t): 0 before the motion, X(s(t')) - X(start) during it, ``travel`` after."""
+        tp = self._tp(t)
+        inside = (tp > self._t0) & (tp < self._t0 + self.duration)
+        X = np.where(tp <= self._t0, 0.0, self.travel)
+        X = np.where(inside, self._X_of_t(np.clip(tp, self._t0, self._t0 + self.duration))
+                     - self.x0, X)
+        return float(X) if np.ndim(t) == 0 else X
+
+    def velocity(self, t):
+        """dX/dt = c eta(s)/(d + eta(s)) during the motion, 0 outside."""
+        tp = self._tp(t)
+        inside = (tp > self._t0) & (tp < self._t0 + self.duration)
+        s = self._s_of_t(np.clip(tp, self._t0, self._t0 + self.duration))
+        eta = self.wave.eta(np.atleast_1d(s)).reshape(np.shape(s))
+        U = np.where(inside, self.celerity * eta / (self.coeffs.depth + eta), 0.0)
+        return float(U) if np.ndim(t) == 0 else U

@@ -291,6 +291,139 @@ def mccowan_MN(eps: float) -> tuple[float, float]:
     return M, 2.0 / 3.0 * math.sin(M * (1.0 + 2.0 * eps / 3.0)) ** 2
 
 
+def _table(coeffs, eps, dims):
+    """sum_i c_(i, ...) eps^i as an array indexed by the remaining keys (S and Y powers)."""
+    from fractions import Fraction
+
+    out = np.zeros(dims)
+    for key, v in coeffs.items():
+        out[key[1:]] += float(Fraction(v)) * eps ** key[0]
+    return out
+
+
+class FentonWave(SolitaryWave):
+    """Fenton's (1972) ninth-order solitary wave: eta, u, w, p as polynomials in
+    S = sech^2(alpha x/d) and z/d with the coefficients of :mod:`fenton_coeffs`, alpha and c as
+    series in eps = A/d, z from the bed; the pressure is Bernoulli's truncated at eps^9."""
+
+    theory = "fenton"
+
+    def __init__(self, A, d, g=9.81, rho=1000.0):
+        from fractions import Fraction
+
+        from sphfoam.models import fenton_coeffs as fc
+
+        e = A / d if d > 0 else float("nan")
+        self.alpha = (math.sqrt(0.75 * e) * sum(float(Fraction(a)) * e**i
+                                               for i, a in enumerate(fc.ALPHA))
+                      if A > 0 and d > 0 else float("nan"))
+        self._F = sum(float(Fraction(c)) * e**i for i, c in enumerate(fc.C)) if e > 0 else 1.0
+        n = fc.ORDER + 2
+        self._eta_c = _table(fc.ETA, e, (n,)) if e > 0 else None
+        self._u_c = _table(fc.U, e, (n, 2 * n)) if e > 0 else None
+        self._w_c = _table(fc.W, e, (n, 2 * n)) if e > 0 else None
+        self._p_c = _table(fc.P, e, (n, 2 * n)) if e > 0 else None
+        super().__init__(A, d, g, rho)
+        self.decay = 2.0 * self.alpha / self.d
+
+    def _celerity(self):
+        return self._F * math.sqrt(self.g * self.d)
+
+    def _S(self, X):
+        return _sech(self.alpha * np.asarray(X, float) / self.d) ** 2
+
+    def _eta(self, X):
+        return self.d * np.polynomial.polynomial.polyval(self._S(X), self._eta_c)
+
+    def _u(self, X, z):
+        return math.sqrt(self.g * self.d) * np.polynomial.polynomial.polyval2d(
+            self._S(X), z / self.d, self._u_c)
+
+    def _w(self, X, z):
+        T = np.tanh(self.alpha * X / self.d)
+        return math.sqrt(self.g * self.d) * self.alpha * T * np.polynomial.polynomial.polyval2d(
+            self._S(X), z / self.d, self._w_c)
+
+    def _p(self, X, z):
+        Y = z / self.d
+        return self.rho * self.g * self.d * (1.0 - Y + np.polynomial.polynomial.polyval2d(
+            self._S(X), Y, self._p_c))
+
+
+class EulerWave(SolitaryWave):
+    """The exact (fully nonlinear, irrotational) solitary wave of :mod:`eulerwave`, solved once
+    per A/d and cached; eta, u, w and the Bernoulli pressure from the conformal map, z from
+    the bed.  Beyond the solved period (|X| > 40 decay lengths) the water is at rest."""
+
+    theory = "euler"
+    _CHUNK = 400
+
+    def __init__(self, A, d, g=9.81, rho=1000.0):
+        from sphfoam.models.eulerwave import euler_solution
+
+        if A > 0 and d > 0:
+            self.sol = euler_solution(A / d)
+        super().__init__(A, d, g, rho)
+        self.decay = self.sol.kd / self.d
+
+    def _celerity(self):
+        return self.sol.F * math.sqrt(self.g * self.d)
+
+    def _inside(self, X):
+        Xd = np.atleast_1d(np.asarray(X, float)) / self.d
+        return Xd, np.abs(Xd) < self.sol.x_half
+
+    def _eta(self, X):
+        Xd, inside = self._inside(X)
+        out = np.zeros(Xd.shape)
+        flat, idx = Xd.ravel(), np.flatnonzero(inside.ravel())
+        res = out.ravel()
+        for k in range(0, idx.size, 4 * self._CHUNK):
+            j = idx[k:k + 4 * self._CHUNK]
+            res[j] = self.sol.surface(flat[j])
+        out = res.reshape(Xd.shape) * self.d
+        return out if np.ndim(X) else float(out[0])
+
+    def _fields(self, X, z):
+        """(u, w, p) at (X, z), the last call's kept (``fields`` asks for all three)."""
+        X, z = np.broadcast_arrays(np.asarray(X, float), np.asarray(z, float))
+        last = getattr(self, "_last", None)
+        if last is not None and last[0].shape == X.shape and np.array_equal(last[0], X) \
+                and np.array_equal(last[1], z):
+            return last[2]
+        out = self._fields_new(X, z)
+        self._last = (X.copy(), z.copy(), out)
+        return out
+
+    def _fields_new(self, X, z):
+        Xd, inside = self._inside(X)
+        zd = np.atleast_1d(z) / self.d - 1.0                     # y from still water
+        u = np.zeros(Xd.size)
+        w = np.zeros(Xd.size)
+        p = -zd.ravel().copy()                                    # hydrostatic at rest
+        idx = np.flatnonzero(inside.ravel())
+        for k in range(0, idx.size, self._CHUNK):
+            j = idx[k:k + self._CHUNK]
+            u[j], w[j], p[j] = self.sol.fields(Xd.ravel()[j], zd.ravel()[j])
+        sq = math.sqrt(self.g * self.d)
+        shape = np.shape(X)
+        return (u.reshape(shape) * sq, w.reshape(shape) * sq,
+                p.reshape(shape) * self.rho * self.g * self.d)
+
+    def _u(self, X, z):
+        return self._fields(X, z)[0]
+
+    def _w(self, X, z):
+        return self._fields(X, z)[1]
+
+    def _p(self, X, z):
+        return self._fields(X, z)[2]
+
+    def volume(self, n: int = 0) -> float:
+        """Excess volume per unit width (m^2), spectrally from the solved surface."""
+        return self.sol.volume * self.d**2
+
+
 # --- registered theories ----------------------------------------------------------------------
 class WaveTheory(Model):
     """Base of the solitary-wave theories: ``solitary(A, d, g)`` returns a :class:`SolitaryWave`
@@ -363,3 +496,31 @@ class KdV2(WaveTheory):
     name = "kdv2"
     doc = "second-order KdV solitary wave with u, w, p, P(12)-(17)"
     Wave = KdV2Wave
+
+
+@register
+class Fenton(WaveTheory):
+    """Fenton's (1972) ninth-order solitary wave: eta = d sum_{i<=9} eps^i sum_j a_ij S^j with
+    S = sech^2(alpha x/d), alpha = sqrt(3 eps/4)(1 - 5/8 eps + 71/128 eps^2 - ...), u and w from
+    the stream function of the bed velocity, Bernoulli's pressure, c/sqrt(g d) = 1 + eps/2 -
+    3/20 eps^2 + 3/56 eps^3 - 309/5600 eps^4 + ...; the series is asymptotic, best for
+    A/d <~ 0.5 (c within 4e-5 of the exact wave there)."""
+
+    name = "fenton"
+    doc = "Fenton (1972) ninth-order solitary wave, eta/u/w/p series in sech^2 (coefficients " \
+          "re-derived by his scheme)"
+    Wave = FentonWave
+
+
+@register
+class Euler(WaveTheory):
+    """The exact solitary wave of the Euler equations (irrotational, inviscid): Bernoulli and
+    kinematic surface conditions solved to 1e-13 in the conformal plane (Clamond & Dutykh
+    2013, eqs. 2.6-2.8) by Newton's method with continuation in A/d, once per A/d (cached);
+    eta, u, w, p anywhere in the fluid from the conformal map, the pressure from Bernoulli;
+    celerity as Longuet-Higgins & Fenton (1974) and Tanaka (1986); A/d <= 0.78."""
+
+    name = "euler"
+    doc = "exact (fully nonlinear) Euler solitary wave, conformal-map Newton solution " \
+          "(Clamond & Dutykh 2013 eqs 2.6-2.8)"
+    Wave = EulerWave

@@ -97,6 +97,142 @@ def surface_elevation(x_particles, y_particles, gauges_x, dx, *, still: float = 
     return top + 0.5 * dx - still
 
 
+# --- sub-particle surface: the SPH fluid fraction crosses 1/2 (issue 13) ------------------------
+#: a surface mode: ``particle`` (the thesis's highest particle, T §4.3.2) or ``fraction``
+SurfaceMode = Literal["particle", "fraction"]
+
+
+@njit(cache=True)
+def _phi(xq, yq, xs, ys, vs, lo, hi, inv_h, w0, support, kernel_f):
+    """Fluid fraction phi(r) = sum_b V_b W(r - r_b) at one point (particles lo..hi)."""
+    s = 0.0
+    for i in range(lo, hi):
+        dxq = xq - xs[i]
+        dyq = yq - ys[i]
+        q = math.sqrt(dxq * dxq + dyq * dyq) * inv_h
+        if q < support:
+            s += vs[i] * kernel_f(q)
+    return s * w0
+
+
+@njit(cache=True)
+def _fraction_crossings(xs, ys, vs, lo, hi, px, py, ux, uy, length, step, inv_h, w0, support,
+                        kernel_f, level):
+    """For each line r = p + t u, 0 <= t <= length, the first t where the fluid fraction reaches
+    ``level`` (marching by ``step``, then bisection to 1e-12 of the step); NaN if never."""
+    n = px.size
+    out = np.full(n, np.nan)
+    for g in range(n):
+        a = 0.0
+        if _phi(px[g], py[g], xs, ys, vs, lo[g], hi[g], inv_h, w0, support, kernel_f) >= level:
+            out[g] = 0.0
+            continue
+        while a < length[g]:
+            b = min(a + step, length[g])
+            if _phi(px[g] + b * ux[g], py[g] + b * uy[g], xs, ys, vs, lo[g], hi[g], inv_h, w0,
+                    support, kernel_f) >= level:
+                for _ in range(60):
+                    m = 0.5 * (a + b)
+                    if _phi(px[g] + m * ux[g], py[g] + m * uy[g], xs, ys, vs, lo[g], hi[g],
+                            inv_h, w0, support, kernel_f) >= level:
+                        b = m
+                    else:
+                        a = m
+                    if b - a <= 1e-12 * step:
+                        break
+                out[g] = 0.5 * (a + b)
+                break
+            a = b
+    return out
+
+
+def _kernel_parts(kernel):
+    from sphfoam.models import kernels as kernel_module
+
+    return getattr(kernel_module, kernel.f_name), float(kernel.support), float(kernel.alpha_2d)
+
+
+def fraction_crossings(x, y, vol, start, direction, length, kernel, h, dx, *, level=0.5):
+    """Distance t along each line start + t direction (unit vectors, 0 <= t <= length) at
+    which the SPH fluid fraction phi = sum_b V_b W(r - r_b) (T(3.8) of the constant 1, without
+    Shepard's normalisation) first reaches ``level`` (1/2: the kernel-smoothed indicator of the
+    water crosses half-way, the sub-particle free surface).  Marched by dx/4 and refined by
+    bisection; NaN where the line never reaches it."""
+    f, support, alpha = _kernel_parts(kernel)
+    x = np.asarray(x, dtype=float)
+    order = np.argsort(x, kind="stable")
+    xs = np.ascontiguousarray(x[order])
+    ys = np.ascontiguousarray(np.asarray(y, dtype=float)[order])
+    vs = np.ascontiguousarray(np.asarray(vol, dtype=float)[order])
+    p = np.atleast_2d(np.asarray(start, dtype=float))
+    u = np.atleast_2d(np.asarray(direction, dtype=float))
+    u = np.broadcast_to(u, p.shape)
+    L = np.broadcast_to(np.asarray(length, dtype=float), p.shape[:1]).copy()
+    reach = support * h
+    xa = np.minimum(p[:, 0], p[:, 0] + L * u[:, 0]) - reach
+    xb = np.maximum(p[:, 0], p[:, 0] + L * u[:, 0]) + reach
+    lo = np.searchsorted(xs, xa, side="left")
+    hi = np.searchsorted(xs, xb, side="right")
+    return _fraction_crossings(xs, ys, vs, lo, hi, np.ascontiguousarray(p[:, 0]),
+                               np.ascontiguousarray(p[:, 1]), np.ascontiguousarray(u[:, 0]),
+                               np.ascontiguousarray(u[:, 1]), L, 0.25 * dx, 1.0 / h,
+                               alpha / h**2, support, f, float(level))
+
+
+def fraction_surface(x, y, vol, gauges_x, kernel, h, dx, *, still: float = 0.0,
+                     level: float = 0.5) -> np.ndarray:
+    """Sub-particle free-surface elevation at ``gauges_x``: the highest y on the vertical
+    x = x_g where the SPH fluid fraction sum_b V_b W(r - r_b) reaches 1/2 (searched down from
+    above the highest particle within the kernel support), minus ``still``; NaN with no fluid
+    within reach.  Pass the fluid particles and their volumes V_b = m_b/rho_b."""
+    g = np.atleast_1d(np.asarray(gauges_x, dtype=float))
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.size == 0:
+        return np.full(g.size, np.nan)
+    reach = _kernel_parts(kernel)[1] * h
+    order = np.argsort(x, kind="stable")
+    xs, ys = x[order], y[order]
+    lo = np.searchsorted(xs, g - reach, side="left")
+    hi = np.searchsorted(xs, g + reach, side="right")
+    top = np.array([ys[a:b].max() if b > a else np.nan for a, b in zip(lo, hi)])
+    bottom = float(y.min()) - reach
+    ok = np.isfinite(top)
+    out = np.full(g.size, np.nan)
+    if ok.any():
+        y0 = top[ok] + reach
+        t = fraction_crossings(x, y, vol, np.column_stack([g[ok], y0]), (0.0, -1.0),
+                               y0 - bottom, kernel, h, dx, level=level)
+        out[ok] = y0 - t
+    return out - still
+
+
+def _mirror(x, y, vol, point, normal, reach):
+    """Fluid particles within ``reach`` of the line through ``point`` with unit ``normal``,
+    reflected across it and added (the wall as a plane of symmetry, so that the kernel sum
+    at the wall sees a whole support)."""
+    dn = (x - point[0]) * normal[0] + (y - point[1]) * normal[1]
+    near = np.abs(dn) < reach
+    xr = x[near] - 2.0 * dn[near] * normal[0]
+    yr = y[near] - 2.0 * dn[near] * normal[1]
+    return (np.concatenate([x, xr]), np.concatenate([y, yr]), np.concatenate([vol, vol[near]]))
+
+
+def fraction_wall_run_up(x, y, vol, wall_x, kernel, h, dx, *, still=0.0) -> float:
+    """Run-up on the vertical wall x = wall_x: the highest point of the wall where the fluid
+    fraction, with the fluid mirrored across the wall, reaches 1/2, minus ``still``."""
+    x, y, vol = (np.asarray(a, dtype=float) for a in (x, y, vol))
+    reach = _kernel_parts(kernel)[1] * h
+    if not (np.abs(x - wall_x) < reach).any():
+        return float("nan")
+    xm, ym, vm = _mirror(x, y, vol, (wall_x, 0.0), (1.0, 0.0), reach)
+    return float(fraction_surface(xm, ym, vm, [wall_x], kernel, h, dx)[0]) - still
+
+
+def _fluid_volumes(st, f):
+    return st.m[f] / st.rho[f]
+
+
 # --- SPH interpolation with Shepard normalisation ----------------------------------------------
 @njit(cache=True)
 def _shepard(xs, ys, vol, vals, lo, hi, xq, yq, inv_h, support, kernel_f):
@@ -173,6 +309,8 @@ class WaveGauges(FunctionObject):
     straight line evaluated at x_g (T Fig 4.1); dx/2 is added (the top of the particle's cell,
     as in ``damBreakFront``) so that water at rest reads its true level, and ``still`` is
     subtracted. A gauge with fluid on one side only reads that particle; with none, NaN.
+    With ``surface fraction`` the gauge is sub-particle instead: the highest y on the vertical
+    where the SPH fluid fraction sum_b V_b W(r - r_b) reaches 1/2 (``fraction_surface``).
     """
 
     name = "waveGauges"
@@ -188,6 +326,10 @@ class WaveGauges(FunctionObject):
         window: float = Field(GAUGE_WINDOW, gt=0, description=(
             "half-width delta x of the search windows either side of a gauge, in dx "
             "(2.5 in T §4.3.2)"))
+        surface: SurfaceMode = Field("particle", description=(
+            "`particle`: the thesis's highest particle + dx/2 (T §4.3.2); `fraction`: where the "
+            "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
+            "sub-particle (issue 13)"))
 
         @field_validator("x", mode="before")
         @classmethod
@@ -201,8 +343,13 @@ class WaveGauges(FunctionObject):
     def execute(self, sim):
         c = self.coeffs
         st, f = _fluid(sim)
-        eta = surface_elevation(st.x[f], st.y[f], c.x, self.ctx.dx, still=c.still,
-                                window=c.window)
+        if c.surface == "fraction":
+            eta = fraction_surface(st.x[f], st.y[f], _fluid_volumes(st, f), c.x,
+                                   self.case.models.sph["kernel"], self.ctx.h, self.ctx.dx,
+                                   still=c.still)
+        else:
+            eta = surface_elevation(st.x[f], st.y[f], c.x, self.ctx.dx, still=c.still,
+                                    window=c.window)
         self.write_row((sim.time, *eta))
 
 
@@ -384,6 +531,8 @@ class RunUp(FunctionObject):
     line rising from ``start`` at ``angle`` degrees (as a slope wall of particleDict) over
     ``length``. Both add dx/2 (the dx/2 surface convention: still water reads R = 0 when
     ``still`` is its level) and subtract ``still``. NaN while no fluid touches the wall/beach.
+    ``surface fraction`` (walls): the highest point of the wall where the SPH fluid fraction,
+    with the fluid mirrored across the wall, reaches 1/2 (sub-particle).
     """
 
     name = "runUp"
@@ -405,6 +554,10 @@ class RunUp(FunctionObject):
         still: float = Field(0.0, description="still-water level (m) run-up is measured from")
         band: float = Field(1.5, gt=0, description=(
             "contact distance from the wall or beach line, in dx"))
+        surface: SurfaceMode = Field("particle", description=(
+            "`particle`: the highest fluid particle in contact + dx/2; `fraction` (mode wall "
+            "only): the highest point of the wall where the SPH fluid fraction, the fluid "
+            "mirrored across the wall, reaches 1/2, sub-particle (issue 13)"))
 
         @model_validator(mode="after")
         def _check(self):
@@ -412,14 +565,21 @@ class RunUp(FunctionObject):
                 raise ValueError("mode wall needs the wall position x")
             if self.mode == "beach" and (self.start is None or self.angle is None):
                 raise ValueError("mode beach needs start (x y) and angle")
+            if self.mode == "beach" and self.surface == "fraction":
+                raise ValueError("surface fraction works with mode wall only: the water "
+                                 "layer at a beach's shoreline is thinner than the kernel "
+                                 "and never reaches fraction 1/2; use surface particle")
             return self
 
     def start(self, case, ctx, start_time_name):
         super().start(case, ctx, start_time_name)
         self.max = float("nan")
 
-    def measure(self, xf, yf) -> float:
+    def measure(self, xf, yf, vf=None) -> float:
         c, dx = self.coeffs, self.ctx.dx
+        if c.surface == "fraction":
+            return fraction_wall_run_up(xf, yf, vf, c.x, self.case.models.sph["kernel"],
+                                        self.ctx.h, dx, still=c.still)
         if c.mode == "wall":
             return wall_run_up(xf, yf, c.x, dx, still=c.still, band=c.band)
         return beach_run_up(xf, yf, c.start, c.angle, dx, length=c.length, still=c.still,
@@ -427,7 +587,7 @@ class RunUp(FunctionObject):
 
     def execute(self, sim):
         st, f = _fluid(sim)
-        r = self.measure(st.x[f], st.y[f])
+        r = self.measure(st.x[f], st.y[f], _fluid_volumes(st, f))
         self.max = float(np.fmax(self.max, r))
         self.write_row((sim.time, r, self.max))
 
@@ -484,7 +644,8 @@ class CrestTracker(FunctionObject):
     rows are written one sample late. At the end c is fitted by least squares to x_c(t) over
     the samples with ``fitFrom`` <= x_c <= ``fitTo`` and eta_c >= ``minHeight`` and written
     to ``celerity.dat`` (the thesis's average wave speed between two gauges, T Table 4.3,
-    with every sample in between).
+    with every sample in between). ``surface fraction`` reads the gauges by the SPH fluid
+    fraction 1/2 (sub-particle) instead of the highest particle.
     """
 
     name = "crestTracker"
@@ -501,6 +662,10 @@ class CrestTracker(FunctionObject):
         still: float = Field(0.0, description="still-water level (m): eta = surface y - still")
         window: float = Field(GAUGE_WINDOW, gt=0, description=(
             "half-width of each gauge's search windows, in dx (2.5 in T §4.3.2)"))
+        surface: SurfaceMode = Field("particle", description=(
+            "`particle`: the thesis's highest particle + dx/2 (T §4.3.2); `fraction`: where the "
+            "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
+            "sub-particle (issue 13)"))
         fitAbove: float = Field(0.5, gt=0, lt=1, description=(
             "x_c is the vertex of the parabola fitted to the readings above this fraction "
             "of the crest height"))
@@ -518,7 +683,8 @@ class CrestTracker(FunctionObject):
         self._written = 0
         self.summary_file = self.folder / "celerity.dat"
 
-    def measure(self, xf, yf) -> tuple[float, float]:
+    def measure(self, xf, yf, vf=None) -> tuple[float, float]:
+        """(x_c, eta_c) from the fluid particles (their volumes ``vf`` for surface fraction)."""
         c, dx = self.coeffs, self.ctx.dx
         if xf.size == 0:
             return float("nan"), float("nan")
@@ -526,12 +692,16 @@ class CrestTracker(FunctionObject):
         hi = c.xMax if c.xMax is not None else float(xf.max())
         step = c.spacing or dx
         gx = lo + step * np.arange(int(math.floor((hi - lo) / step + 1e-9)) + 1)
-        eta = surface_elevation(xf, yf, gx, dx, still=c.still, window=c.window)
+        if c.surface == "fraction":
+            eta = fraction_surface(xf, yf, vf, gx, self.case.models.sph["kernel"], self.ctx.h,
+                                   dx, still=c.still)
+        else:
+            eta = surface_elevation(xf, yf, gx, dx, still=c.still, window=c.window)
         return crest(gx, eta, c.fitAbove)
 
     def execute(self, sim):
         st, f = _fluid(sim)
-        xc, ec = self.measure(st.x[f], st.y[f])
+        xc, ec = self.measure(st.x[f], st.y[f], _fluid_volumes(st, f))
         self.samples.append((float(sim.time), xc, ec))
         if len(self.samples) >= 2:
             self._flush(len(self.samples) - 1)
