@@ -12,7 +12,7 @@ import pytest
 
 from sphfoam.case import foamdict
 from sphfoam.case.foamdict import DimensionSet, FoamDictError, QuotedString, dumps, lookup, parse, read
-from sphfoam.io.asciinum import parse_numbers
+from sphfoam.case.asciinum import parse_numbers
 
 # ---------------------------------------------------------------------------
 # Words with balanced parentheses
@@ -496,7 +496,7 @@ def test_list_that_is_not_plain_numbers_takes_the_general_path(path):
 @pytest.fixture(params=["compiled", "small"])
 def path(request, monkeypatch):
     """Run a test through the numba pass and through the regex + numpy path."""
-    from sphfoam.io import asciinum
+    from sphfoam.case import asciinum
 
     monkeypatch.setattr(asciinum, "COMPILED_MIN_BYTES", 0 if request.param == "compiled" else 1 << 60)
     return request.param

@@ -10,7 +10,7 @@ import pytest
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
 from sphfoam.setup.geometry import segments_of
-from sphfoam.setup.meshwalls import MeshWallError, read_mesh_walls
+from sphfoam.case.meshwalls import MeshWallError, read_mesh_walls
 
 
 def box_mesh(x0, x1, y0, y1, z0, z1):

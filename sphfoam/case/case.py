@@ -99,7 +99,7 @@ class Case:
         problems = []
         for name, wall in pd.walls.items():
             if isinstance(wall, MeshWalls):          # read the mesh file of a `type mesh` wall
-                from sphfoam.setup.meshwalls import MeshWallError
+                from sphfoam.case.meshwalls import MeshWallError
 
                 try:
                     wall.load(self.path)

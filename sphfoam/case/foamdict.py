@@ -5,7 +5,7 @@ The reader runs in linear time: one compiled regular expression splits the
 text into tokens in a single pass, and a recursive-descent parser walks the
 token list with an index. Line and column numbers are only worked out when an
 error is reported. Long ``List<T>`` bodies skip the tokenizer and are read by one
-compiled pass straight into a numpy array (:mod:`sphfoam.io.asciinum`).
+compiled pass straight into a numpy array (:mod:`sphfoam.case.asciinum`).
 
 Grammar
 -------
@@ -484,7 +484,7 @@ def _array(text: str, start: int, word: str):
         close = m.end() - 1 if m else -1
     if close < 0:
         return None
-    from sphfoam.io.asciinum import parse_numbers
+    from sphfoam.case.asciinum import parse_numbers
 
     values = parse_numbers(text[body:close], n * ncomp, ncomp, integer=kind == "i")
     if values is None:

@@ -260,7 +260,7 @@ class SlopeWalls(_Wall):
 
 
 class MeshWalls(_Wall):
-    """Wall rows along the lines of a mesh file read with meshio (sphfoam.setup.meshwalls):
+    """Wall rows along the lines of a mesh file read with meshio (sphfoam.case.meshwalls):
     its line cells, the section of its surface (STL, OBJ, VTK, Gmsh triangles or quads) by the
     plane z = ``z``, or the boundary of a flat surface mesh; the solid lies behind the faces
     (their normals point into the fluid) or on ``side`` of the line cells."""
@@ -284,7 +284,7 @@ class MeshWalls(_Wall):
         """Read the mesh (relative to ``case_dir``); raises MeshWallError with the reason."""
         from pathlib import Path
 
-        from sphfoam.setup.meshwalls import read_mesh_walls
+        from sphfoam.case.meshwalls import read_mesh_walls
 
         f = Path(self.file)
         self._polylines = read_mesh_walls(f if f.is_absolute() else Path(case_dir) / f,

@@ -132,6 +132,7 @@ if s_ab > sigma_a:
     sigma_a = s_ab
 """
 
+#: the 3 x 3 cell walk around particle ``a``, run once per step to build the neighbour list
 _CELLS = """\
 ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)
 iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)
@@ -144,9 +145,21 @@ for cy0 in range({ylo}, {yhi}):
             dx_ab = xa - x[b]
             dy_ab = ya - y[b]
 {wrap}            r2 = dx_ab * dx_ab + dy_ab * dy_ab
-            if r2 >= support2 or r2 == 0.0:   # itself, or a coincident particle (grad W = 0)
+            if r2 >= reach2 or b == a:
                 continue
-            q = math.sqrt(r2) * inv_h
+{body}
+"""
+
+#: every pair loop: over the neighbour list of particle ``a`` (built once per step)
+_LIST = """\
+for k in range(nb_start[a], nb_start[a + 1]):
+    b = nb_idx[k]
+    dx_ab = xa - x[b]
+    dy_ab = ya - y[b]
+{wrap}    r2 = dx_ab * dx_ab + dy_ab * dy_ab
+    if r2 >= support2 or r2 == 0.0:   # beyond the support now, or coincident (grad W = 0)
+        continue
+    q = math.sqrt(r2) * inv_h
 {body}
 """
 
@@ -318,8 +331,19 @@ class Assembly:
                 out.append(f"{kw} {' or '.join(conds)}:\n" + _indent(body))
         return "\n".join(out)
 
-    def pair_loop(self, terms: list, sigma: bool = False) -> str:
-        """The 3 x 3 cell gather around particle ``a`` with ``terms`` for each neighbour."""
+    def _wrap(self) -> str:
+        sel = self.sel
+        wrap = ""
+        if sel.periodic_x:
+            wrap += ("if dx_ab > half_lx:\n    dx_ab -= lx\nelif dx_ab < -half_lx:\n"
+                     "    dx_ab += lx\n")
+        if sel.periodic_y:
+            wrap += ("if dy_ab > half_ly:\n    dy_ab -= ly\nelif dy_ab < -half_ly:\n"
+                     "    dy_ab += ly\n")
+        return wrap
+
+    def cell_walk(self, body: str) -> str:
+        """The 3 x 3 cell gather around particle ``a`` (within ``reach2``), for the list."""
         sel = self.sel
 
         def axis(per, i, n, name):
@@ -329,16 +353,16 @@ class Assembly:
 
         xlo, xhi, cx = axis(sel.periodic_x, "ix", "ncx", "cx")
         ylo, yhi, cy = axis(sel.periodic_y, "iy", "ncy", "cy")
-        wrap = ""
-        if sel.periodic_x:
-            wrap += ("if dx_ab > half_lx:\n    dx_ab -= lx\nelif dx_ab < -half_lx:\n"
-                     "    dx_ab += lx\n")
-        if sel.periodic_y:
-            wrap += ("if dy_ab > half_ly:\n    dy_ab -= ly\nelif dy_ab < -half_ly:\n"
-                     "    dy_ab += ly\n")
+        wrap = self._wrap()
         return _CELLS.format(xlo=xlo, xhi=xhi, ylo=ylo, yhi=yhi, cx=cx, cy=cy,
                              wrap=_block(wrap, 12) + ("\n" if wrap else ""),
-                             body=_block(self.neighbour_body(terms, sigma), 12))
+                             body=_block(body, 12))
+
+    def pair_loop(self, terms: list, sigma: bool = False) -> str:
+        """The loop over the neighbour list of particle ``a`` with ``terms`` for each b."""
+        wrap = self._wrap()
+        return _LIST.format(wrap=_block(wrap, 4) + ("\n" if wrap else ""),
+                            body=_block(self.neighbour_body(terms, sigma), 4))
 
     def particle_code(self, terms: list, part: str) -> str:
         return "\n".join(expand_components(getattr(t, part)) for t in terms
@@ -369,8 +393,7 @@ def expand_components(code: str) -> str:
     return T.expand_components(code) if code else ""
 
 
-_ARGS = ("x, y, u, v, rho, p, c, m, kind, cell_start, x0, y0, inv_cell, ncx, ncy, prm, aux, "
-         "fld")
+_ARGS = "x, y, u, v, rho, p, c, m, kind, nb_start, nb_idx, prm, aux, fld"
 
 
 def generate_source(sel: Selection, param_names: list[str]) -> str:
@@ -412,6 +435,32 @@ def equation_of_state(rho, p, c, prm):
     for a in prange(rho.shape[0]):
 {_block(eos or "pass", 8)}
 ''']
+    parts.append(f'''
+
+@njit(parallel=True, fastmath=True, cache=True)
+def count_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, count):
+    """Neighbours of every particle within sqrt(reach2) (the cell side), from the cells."""
+{_block(bind, 4)}
+    for a in prange(x.shape[0]):
+        xa = x[a]
+        ya = y[a]
+        n_a = 0
+{_block(asm.cell_walk("n_a += 1"), 8)}
+        count[a] = n_a
+
+
+@njit(parallel=True, fastmath=True, cache=True)
+def fill_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, nb_start,
+                    nb_idx):
+    """The neighbour list: b of particle a in nb_idx[nb_start[a]:nb_start[a + 1]], in the
+    order of the cell walk (cells by row, particles by cell)."""
+{_block(bind, 4)}
+    for a in prange(x.shape[0]):
+        xa = x[a]
+        ya = y[a]
+        k = nb_start[a]
+{_block(asm.cell_walk("nb_idx[k] = b" + chr(10) + "k += 1"), 8)}
+''')
     if asm.has_stage("prepass"):
         pre = asm.stage("prepass", "all")
         parts.append(f'''
@@ -542,6 +591,25 @@ class Pipeline:
     def density_rate(self):
         return self.module.density_rate
 
+    def neighbour_list(self, x, y, cells, reach: float, start=None, idx=None):
+        """(nb_start, nb_idx): the neighbours of every particle within ``reach`` (at most
+        the cell side), found by one walk of the cells; ``start``/``idx`` are reused when
+        large enough."""
+        n = x.shape[0]
+        count = np.empty(n, dtype=np.int64)
+        args = (x, y, cells.cell_start, cells.x0, cells.y0, 1.0 / cells.cell_size, cells.ncx,
+                cells.ncy, self.prm, reach * reach)
+        self.module.count_neighbours(*args, count)
+        if start is None or start.shape[0] != n + 1:
+            start = np.empty(n + 1, dtype=np.int64)
+        start[0] = 0
+        np.cumsum(count, out=start[1:])
+        total = int(start[-1])
+        if idx is None or idx.shape[0] < total:
+            idx = np.empty(int(total * 1.1) + 16, dtype=np.int32)
+        self.module.fill_neighbours(*args, start, idx)
+        return start, idx
+
     @property
     def prepass(self):
         """None when no selected model needs per-particle auxiliary fields."""
@@ -631,8 +699,15 @@ def _warm_up(module, prm):
     aux = np.zeros((len(module.AUX), n))
     fld = np.zeros((len(module.FIELDS), n))
     module.equation_of_state(rho, f.copy(), f.copy(), prm)
-    args = (x, f, f, f, rho, f, f, m, kind, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, aux, fld)
-    funcs = [module.equation_of_state, module.rates, module.density_rate]
+    count = np.zeros(n, dtype=np.int64)
+    grid = (x, f, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, float(prm[0]) ** 2 * 16.0)
+    module.count_neighbours(*grid, count)
+    nb_start = np.array([0, 1, 2], dtype=np.int64)
+    nb_idx = np.array([1, 0], dtype=np.int32)
+    module.fill_neighbours(*grid, nb_start, nb_idx)
+    args = (x, f, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
+    funcs = [module.equation_of_state, module.count_neighbours, module.fill_neighbours,
+             module.rates, module.density_rate]
     module.rates(*args, f.copy(), f.copy(), f.copy(), f.copy())
     module.density_rate(*args, f.copy())
     if hasattr(module, "prepass"):

@@ -90,6 +90,8 @@ class Simulation:
         self.aux = np.zeros((pipeline.n_aux, state.n))
         self.on_removal = None
         self._fld = None
+        #: (nb_start, nb_idx) of the current step (sphfoam.engine.codegen.Pipeline)
+        self._nb = (None, None)
         #: prescribed motions by wall-entry index (sphfoam.models.motion)
         self.motions = dict(motions or {})
         self.segments = list(segments)
@@ -156,17 +158,24 @@ class Simulation:
         order = self.cells.sort(cell)
         st.apply(order, permute)
         self._run_hooks("after_sort", order)
+        # one neighbour list for every loop of the step: within the cell side, so a pair that
+        # comes within the support during the step is in it (the margin cellSizeFactor - 1)
+        self._nb = self.pipeline.neighbour_list(st.x, st.y, self.cells, self.cells.cell_size,
+                                                *self._nb)
 
     def _grid_args(self):
-        st, cl = self.state, self.cells
+        st = self.state
         if self.aux.shape[1] != st.n:
             self.aux = np.zeros((self.pipeline.n_aux, st.n))
         if self._fld is None or self._fld.shape[1] != st.n:
             names = self.pipeline.fields
             self._fld = (np.stack([st.extra[k] for k in names]) if names
                          else np.zeros((0, st.n)))
-        return (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, cl.cell_start,
-                cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy, self.prm, self.aux, self._fld)
+        nb_start, nb_idx = self._nb
+        if nb_start is None or nb_start.shape[0] != st.n + 1:
+            raise RuntimeError("the neighbour list is stale: call neighbour_update first")
+        return (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, nb_start, nb_idx,
+                self.prm, self.aux, self._fld)
 
     def _prepass(self, args):
         if self.pipeline.prepass is not None:

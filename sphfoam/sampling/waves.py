@@ -147,9 +147,7 @@ def _fraction_crossings(xs, ys, vs, lo, hi, px, py, ux, uy, length, step, inv_h,
 
 
 def _kernel_parts(kernel):
-    from sphfoam.models import kernels as kernel_module
-
-    return getattr(kernel_module, kernel.f_name), float(kernel.support), float(kernel.alpha_2d)
+    return kernel.f_jit, float(kernel.support), float(kernel.alpha_2d)
 
 
 def fraction_crossings(x, y, vol, start, direction, length, kernel, h, dx, *, level=0.5):

@@ -1,7 +1,7 @@
 """Wall geometry of ``system/particleDict`` as straight segments with normals.
 
 Every wall entry (a tank ``box``, a ``polyline``, a ``slope`` or the lines of a ``mesh`` file,
-sphfoam.setup.meshwalls) becomes a list of
+sphfoam.case.meshwalls) becomes a list of
 :class:`Segment` s whose unit normal points *into the fluid*. The boundary models use them in
 two ways: particle boundaries (repulsive, stationary ghosts, hybrid) place wall particles along
 them and store, per wall particle, the normal of the nearest wall point, its distance behind
