@@ -148,8 +148,10 @@ def _blow_up_text(d, path: Path) -> str:
 @app.command()
 def setup(case: Path = typer.Argument(Path("."), help="case directory"),
           force: bool = typer.Option(False, "--force", help="overwrite existing particles in 0/")):
-    """Generate particles from system/particleDict into 0/ (hydrostatic, at rest), and
-    the one-cell constant/polyMesh and CASE.foam that ParaView's OpenFOAM reader opens."""
+    """Generate particles from system/particleDict into 0/ (hydrostatic, at rest).
+
+    Also writes the one-cell constant/polyMesh and CASE.foam that ParaView's OpenFOAM reader opens.
+    """
     from sphfoam.io.fields import has_particles
     from sphfoam.runner import setup_case
 
@@ -345,8 +347,7 @@ def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
                                                           help="only these times")):
     """Write VTK/<case>.pvd for ParaView: per time a <case>_<t>.vtm of fluid and walls.
 
-    Replaces the previous export (times not selected with -t are removed); fails when
-    there is nothing to export.
+    Replaces the previous export (times not selected with -t are removed); fails when there is nothing to export.
     """
     from sphfoam.io.vtk import export_case
 
@@ -357,8 +358,10 @@ def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
 
 @export_app.command("foam")
 def export_foam(case: Path = typer.Argument(Path("."), help="case directory")):
-    """Make CASE open in ParaView's OpenFOAM reader: CASE.foam, the one-cell mesh, and time
-    directories of earlier sphfoam versions rewritten in the cloud layout (values unchanged)."""
+    """Make CASE open in ParaView's OpenFOAM reader: write CASE.foam and the one-cell mesh.
+
+    Time directories of earlier sphfoam versions are rewritten in the cloud layout (values unchanged).
+    """
     from sphfoam.io.polymesh import prepare_case
 
     c = _case(case)
