@@ -122,9 +122,101 @@ def build(dx):
     return sel, ctx, build_pipeline(sel, ctx)
 
 
+#: the cases ``--case`` runs through the case machinery (setup, runner.build_simulation)
+CASE_DIRS = {
+    # the dam break matched with DualSPHysics 5.4 (issue 12): benchmarks/cases/damBreakMatched
+    "matched": HERE / "cases" / "damBreakMatched",
+    # the thesis flume (Goring paddle, quartic kernel, stationary ghosts, T ch. 4)
+    "flume": REPO / "tutorials" / "solitaryWave",
+    # P's wall case (finite Gaussian, XSPH, MLS every 20 steps, mirrored walls)
+    "wall": REPO / "tutorials" / "solitaryWallRunup",
+}
+#: which case ``make_sim`` builds ("engine": the synthetic dam break above, no case directory)
+CASE = "engine"
+
+#: peers measured on this machine kind (issue 12): one thread, user CPU, start-up cancelled,
+#: the matched dam break (23 018 particles)
+REFERENCE = [
+    ("DualSPHysics 5.4 CPU (generic build)", "Verlet", 2.88e6, 50e6),
+    ("DualSPHysics 5.4 CPU (-march=native)", "Verlet", 3.33e6, 58e6),
+    ("PySPH 1.0b2", "PEC", 1.49e6, 26e6),
+    ("sphfoam before issue 12", "verlet", 2.15e6, 37e6),
+    ("sphfoam before issue 12", "symplectic", 1.15e6, 40e6),
+]
+
+
+def _rss_bytes() -> int:
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
+_case_size_cache: dict = {}
+
+
+def _case_size(src: Path) -> tuple[int, float]:
+    """(particles, dx) of a case at its own resolution (set up once in a scratch folder)."""
+    if src not in _case_size_cache:
+        from sphfoam.case.case import Case
+        from sphfoam.case.edit import clone_case
+        from sphfoam.runner import setup_case
+
+        with tempfile.TemporaryDirectory(prefix="sphfoam-bench-size-") as tmp:
+            d = clone_case(src, Path(tmp) / src.name)
+            case = Case(d)
+            st = setup_case(case, log=lambda *_: None)
+            _case_size_cache[src] = (int(st.n), float(case.particles.dx))
+    return _case_size_cache[src]
+
+
+def make_case_sim(name: str, total: int):
+    """The simulation of a case directory (``CASE_DIRS``) at the dx that gives about
+    ``total`` particles, set up hydrostatic and built as ``sphfoam run`` builds it, without
+    function objects or writes."""
+    import math as _m
+
+    from sphfoam import runner
+    from sphfoam.case.case import Case
+    from sphfoam.case.edit import clone_case
+    from sphfoam.engine.state import ParticleState
+    from sphfoam.io.fields import read_state
+
+    src = CASE_DIRS[name]
+    n0, dx0 = _case_size(src)
+    dx = dx0 * _m.sqrt(n0 / total)
+    tmp = Path(tempfile.mkdtemp(prefix="sphfoam-bench-case-"))
+    d = clone_case(src, tmp / src.name, {"system/particleDict:dx": dx,
+                                         "system/controlDict:functions": {}})
+    case = Case(d)
+    runner.setup_case(case, log=lambda *_: None)
+    state = ParticleState.from_fields(read_state(d / "0"))
+    rss0 = _rss_bytes()
+    sim = runner.build_simulation(case, state)
+    sim.step()
+    st = sim.state
+    mem = (_rss_bytes() - rss0) / max(st.n, 1)
+    return sim, dict(case=name, dx=dx, h=sim.h, n=int(st.n), n_fluid=int(st.n_fluid),
+                     n_wall=int(st.n - st.n_fluid), cells=(sim.cells.ncx, sim.cells.ncy),
+                     bytes_per_particle=mem, models=sim.pipeline.selection.describe(),
+                     integrator=sim.integrator.name)
+
+
 def make_sim(total: int):
-    """A fresh dam-break Simulation with about ``total`` particles (the pipeline module is
-    generated and compiled once per process; only its coefficient vector depends on dx)."""
+    """A fresh Simulation with about ``total`` particles: the case of ``--case`` or the
+    synthetic dam break (the pipeline module is generated and compiled once per process;
+    only its coefficient vector depends on dx)."""
+    if CASE != "engine":
+        return make_case_sim(CASE, total)
+    return make_engine_sim(total)
+
+
+def make_engine_sim(total: int):
+    """The synthetic dam break with about ``total`` particles."""
     import numpy as np
     from sphfoam import registry
     from sphfoam.engine.simulation import Simulation
@@ -340,7 +432,9 @@ def stage_breakdown(sim, seconds, min_steps=5):
     sim.cells.bin = tm.wrap("  bin", sim.cells.bin)
     sim.cells.sort = tm.wrap("  sort", sim.cells.sort)
     st.apply = tm.wrap("  permute", st.apply)
-    kern = [k for k in ("_monaghan_half", "_monaghan_full", "_density_update")
+    kern = [k for k in ("_monaghan_half", "_monaghan_kick", "_drift", "_density_update",
+                        "_verlet_step", "_symplectic_half", "_symplectic_velocity_density",
+                        "_symplectic_drift", "_pc_predict", "_pc_correct")
             if hasattr(integ_mod, k)]
     saved = {k: getattr(integ_mod, k) for k in kern}
     for k in kern:
@@ -436,10 +530,15 @@ def compile_child(total):
     import sphfoam.engine.simulation  # noqa: F401
     import sphfoam.models  # noqa: F401
     t1 = time.perf_counter()
-    x, y, kind, dx, n = dam_break(total)
-    sel, ctx, pipe = build(dx)
-    t2 = time.perf_counter()
-    sim, info = make_sim(total)
+    if CASE == "engine":
+        x, y, kind, dx, n = dam_break(total)
+        sel, ctx, pipe = build(dx)
+        t2 = time.perf_counter()
+        sim, info = make_sim(total)
+    else:
+        sim, info = make_sim(total)
+        pipe = sim.pipeline
+        t2 = time.perf_counter()
     t3 = time.perf_counter()
     sim.step()
     t4 = time.perf_counter()
@@ -461,7 +560,8 @@ def measure_compile(cache_dir: Path, small_n: int):
     for label in ("cold", "cached"):
         t0 = time.perf_counter()
         cp = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--_compile-child",
-                             str(small_n)], env=env, capture_output=True, text=True,
+                             str(small_n), "--case", CASE], env=env, capture_output=True,
+                            text=True,
                             cwd=str(REPO))
         wall = time.perf_counter() - t0
         if cp.returncode != 0:
@@ -494,6 +594,10 @@ THROUGHPUT_COLS = [
     ("per thread", lambda r: _si(r["particle_force_evals_per_s_per_thread"])),
     ("pair interactions/s", lambda r: _si(r["pair_interactions_per_s"])),
     ("mean nbrs", lambda r: f"{r['mean_neighbours']:.1f}"),
+    ("vs DualSPHysics", lambda r: f"{r['particle_steps_per_s'] / r['threads'] / REFERENCE[0][2]:.2f}"
+     if r.get("case") == "matched" else "-"),
+    ("bytes/particle", lambda r: f"{r['bytes_per_particle']:.0f}" if "bytes_per_particle" in r
+     else "-"),
     ("speedup", lambda r: f"{r.get('speedup', 1.0):.2f}"),
     ("drift", lambda r: f"{r['drift']:.2f}"),
     ("launch (us)", lambda r: f"{r['parallel_launch_us']:.0f}"),
@@ -553,12 +657,18 @@ def print_tables(results):
     if results.get("compile"):
         show("Pipeline compile time", [c[0] for c in COMPILE_COLS],
              [[f(k, d) for _, f in COMPILE_COLS] for k, d in results["compile"].items()])
-    show("Run throughput (dam break)", [c[0] for c in THROUGHPUT_COLS],
+    show("Run throughput", [c[0] for c in THROUGHPUT_COLS],
          [[f(r) for _, f in THROUGHPUT_COLS] for r in results["runs"]])
+    show("Reference: the matched dam break in other codes, this machine kind, one thread",
+         ["code", "integrator", "particle-steps/s", "pair interactions/s"], reference_rows())
     for r in results["runs"]:
         show(f"Stages, N={r['n']:,}, {r['threads']} thread(s), "
              f"{r['stage_breakdown']['ms_per_step']:.2f} ms/step instrumented",
              ["stage", "calls/step", "ms/call", "median ms/call", "ms/step", "share"], stage_rows(r))
+
+
+def reference_rows():
+    return [[code, integ, _si(ps), _si(pi)] for code, integ, ps, pi in REFERENCE]
 
 
 def write_markdown(results, path: Path):
@@ -594,6 +704,11 @@ def write_markdown(results, path: Path):
               "",
               markdown_table([c[0] for c in THROUGHPUT_COLS],
                              [[f(r) for _, f in THROUGHPUT_COLS] for r in results["runs"]]),
+              "", "Reference (issue 12): the matched dam break (benchmarks/cases/damBreakMatched, "
+              "23 018 particles) in other codes on this machine kind, one thread, user CPU, "
+              "start-up cancelled:", "",
+              markdown_table(["code", "integrator", "particle-steps/s",
+                              "pair interactions/s"], reference_rows()),
               "", "## Neighbours", "",
               markdown_table(["N", "pairs", "mean nbrs (all / fluid)", "candidates / pair",
                               "wall-a pairs", "wall-wall pairs"],
@@ -645,7 +760,9 @@ def meta(args):
                 python=platform.python_version(), numba=numba.__version__,
                 numpy=np.__version__, threading_layer=layer, commit=commit,
                 command=" ".join([Path(sys.argv[0]).name] + sys.argv[1:]),
-                case=(f"dam break, column {H} m x {H} m, tank {TANK_LENGTH * H} m long, walls "
+                case=(f"{CASE}: {CASE_DIRS[CASE].relative_to(REPO)} with dx scaled to each N"
+                      if CASE != "engine" else
+                      f"dam break, column {H} m x {H} m, tank {TANK_LENGTH * H} m long, walls "
                       f"{TANK_HEIGHT * H} m high, {LAYERS} layers of stationary ghosts; "
                       f"h = {HDX} dx; " + ", ".join(f"{f}={s['type']}" for f, s in MODELS) +
                       f", alpha 0.1; integrator {INTEGRATOR['type']}, beta {BETA}"),
@@ -677,8 +794,16 @@ def main(argv=None):
                     "machine to be idle (< 15%% busy; 0 = do not wait; default 60)")
     ap.add_argument("--tag", default=None, help="suffix of the result file names")
     ap.add_argument("--out-dir", type=Path, default=HERE / "results")
+    ap.add_argument("--case", choices=["engine", *CASE_DIRS], default="engine",
+                    help="engine: the synthetic dam break (default); matched: the dam break "
+                    "matched with DualSPHysics (benchmarks/cases/damBreakMatched); flume: "
+                    "tutorials/solitaryWave; wall: tutorials/solitaryWallRunup (P's set-up)")
     ap.add_argument("--_compile-child", type=int, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    global CASE
+    CASE = args.case
+    if CASE != "engine" and args.tag is None:
+        args.tag = CASE
 
     if args._compile_child is not None:
         compile_child(args._compile_child)

@@ -256,6 +256,7 @@ def _run(case, c, log, progress, t_end, console=None) -> RunReport:
             wrote = writes.due(sim.step_index, sim.time, t_prev) or sim.time >= t_end - eps
             if wrote:
                 written.append(_write(case, sim, log))
+                sim.invalidate_neighbours()
                 _purge(written, c.purgeWrite)
             for fo in functions.values():
                 if fo.due(sim, wrote, t_prev):

@@ -283,3 +283,44 @@ def _all_units():
     for f in PKG.rglob("*.py"):
         rel = f.relative_to(PKG.parent).with_suffix("")
         yield ".".join(rel.parts[:2]) if len(rel.parts) > 1 else rel.parts[0]
+
+
+# --- one neighbour list, reused while valid (issue 12) ---------------------------------------
+def test_the_reused_neighbour_list_holds_every_pair_at_every_evaluation(tutorial):
+    """A dam break stepped with the list reused between builds: at every evaluation of the
+    rates (mid-step stages included) every pair within the support is in the list."""
+    from scipy.spatial import cKDTree
+
+    from sphfoam import runner
+    from sphfoam.case.case import Case
+    from sphfoam.engine.state import ParticleState
+    from sphfoam.io.fields import read_state
+
+    d = tutorial("damBreak", {"system/particleDict:dx": 0.0125,
+                              "system/controlDict:functions": {}})
+    case = Case(d)
+    runner.setup_case(case, log=lambda *_: None)
+    sim = runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+    rates = sim.rates
+    checked = []
+
+    def checked_rates():
+        st = sim.state
+        start, idx = sim._nb
+        pts = np.column_stack([st.x, st.y])
+        pairs = cKDTree(pts).query_pairs(sim.pipeline.support_radius * (1 - 1e-9),
+                                         output_type="ndarray")
+        owner = np.repeat(np.arange(st.n), np.diff(start))
+        listed = owner * st.n + idx[:start[-1]]
+        want = np.concatenate([pairs[:, 0] * st.n + pairs[:, 1],
+                               pairs[:, 1] * st.n + pairs[:, 0]])
+        missing = ~np.isin(want, listed)
+        assert not missing.any(), (sim.step_index, int(missing.sum()))
+        checked.append(len(pairs))
+        return rates()
+
+    sim.rates = checked_rates
+    for _ in range(400):
+        sim.step()
+    assert sim.list_reused > sim.list_built > 3     # the flow moved: rebuilt, and reused
+    assert len(checked) == 2 * 400 and min(checked) > 0

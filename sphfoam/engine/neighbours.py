@@ -1,9 +1,13 @@
-"""Cell-linked-list neighbour search with particles kept sorted by cell (T §3.12).
+"""Cell-linked-list neighbour search with particles kept sorted by cell (T §3.12), and the
+Verlet neighbour list every pair loop reads.
 
-Each step the particles are binned into square cells of side >= kappa h and reordered
-(a stable counting sort), so that the particles of one cell are contiguous in memory and the
-pair loops read neighbours from nearby addresses. A pair loop visits the 3 x 3 block of cells
-around a particle (``cell_start[c] : cell_start[c + 1]`` is the range of cell ``c``).
+When the list is (re)built the particles are binned into square cells of side >= kappa h
+(the support) and reordered (a stable counting sort), so that the particles of one cell are
+contiguous in memory; one walk of the 3 x 3 block of cells around each particle
+(``cell_start[c] : cell_start[c + 1]`` is the range of cell ``c``) lists its neighbours within
+the cell side R. The list serves every pair loop until some particle has moved (skin/2 minus the
+next step's motion) since, skin = R - kappa h (Verlet 1967): no pair can then have come
+within the support without being listed.
 """
 
 from __future__ import annotations
@@ -36,6 +40,28 @@ def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
             cell[a] = -1
             outside += 1
     return outside
+
+
+@njit(cache=True)   # no fastmath: a NaN position must not pass for a small displacement
+def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, px, py):
+    """(largest displacement^2 since (xr, yr), largest speed^2, a particle outside the box
+    [x0, x1) x [y0, y1) on a non-periodic axis (px, py: periodic flags) or not finite)."""
+    d2max = 0.0
+    v2max = 0.0
+    out = False
+    for a in range(x.shape[0]):
+        dx = x[a] - xr[a]
+        dy = y[a] - yr[a]
+        d2 = dx * dx + dy * dy
+        if not d2 <= d2max:
+            d2max = d2 if d2 == d2 else np.inf
+        s2 = u[a] * u[a] + v[a] * v[a]
+        if not s2 <= v2max:
+            v2max = s2 if s2 == s2 else np.inf
+        if (not px and not (x[a] >= x0 and x[a] < x1)) or \
+                (not py and not (y[a] >= y0 and y[a] < y1)):
+            out = True
+    return d2max, v2max, out
 
 
 @njit(**_JIT)

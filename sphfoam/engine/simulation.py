@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, prange
 
-from sphfoam.engine.neighbours import CellList, permute
+from sphfoam.engine.neighbours import CellList, displacement_check, permute
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.timestep import stable_time_step
 
@@ -92,6 +92,10 @@ class Simulation:
         self._fld = None
         #: (nb_start, nb_idx) of the current step (sphfoam.engine.codegen.Pipeline)
         self._nb = (None, None)
+        #: positions at the last build of the list (None: rebuild at the next step)
+        self._ref = None
+        self.list_built = 0
+        self.list_reused = 0
         #: prescribed motions by wall-entry index (sphfoam.models.motion)
         self.motions = dict(motions or {})
         self.segments = list(segments)
@@ -103,6 +107,11 @@ class Simulation:
             raise ValueError("two selected models set the advection velocity")
         self._advection = adv[0] if adv else None
         self._summaries = sel.hooks("summary")
+        #: list radius (the cell side) minus the support: how far pairs may close in
+        self.skin = self.cells.cell_size - reach
+        #: a model that adds or removes particles every step needs a new list every step
+        self.reuse_neighbours = not (self._hooks["add_particles"] or
+                                     self._hooks["before_neighbours"])
         for attach in sel.hooks("attach"):
             attach(self)
 
@@ -137,10 +146,38 @@ class Simulation:
         self._run_hooks("before_evaluation")
 
     # --- stages --------------------------------------------------------------------------
-    def neighbour_update(self):
-        """Bin into cells, drop particles that left the domain, let models add particles
-        (e.g. mirror ghosts), sort by cell."""
+    def invalidate_neighbours(self):
+        """Rebuild the neighbour list at the next step (after a write, so that a run restarted
+        from the written time does exactly what an uninterrupted one does)."""
+        self._ref = None
+
+    def _list_still_valid(self) -> bool:
+        """Whether the neighbour list of an earlier step serves this one: no particle added
+        by a model, none left the domain, and every pair now within the support is listed
+        even after this step's motion (largest displacement since the build plus 1.5 v_max
+        dt < skin / 2)."""
         st = self.state
+        ref = self._ref
+        if ref is None or not self.reuse_neighbours or ref[0].shape[0] != st.n:
+            return False
+        cl = self.cells
+        x1 = cl.x0 + cl.ncx * cl.cell_size
+        y1 = cl.y0 + cl.ncy * cl.cell_size
+        d2, v2, out = displacement_check(st.x, st.y, ref[0], ref[1], st.u, st.v, cl.x0, cl.y0,
+                                         x1, y1, cl.lx > 0.0, cl.ly > 0.0)
+        if out:
+            return False
+        reach = math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt
+        return reach < 0.5 * self.skin
+
+    def neighbour_update(self):
+        """The neighbour list of this step: the previous one while it is valid; otherwise bin
+        into cells, drop particles that left the domain, let models add particles (e.g.
+        mirror ghosts), sort by cell and list the neighbours."""
+        st = self.state
+        if self._list_still_valid():
+            self.list_reused += 1
+            return
         self._fld = None
         self._run_hooks("before_neighbours")
         cell, outside = self.cells.bin(st.x, st.y)
@@ -162,6 +199,8 @@ class Simulation:
         # comes within the support during the step is in it (the margin cellSizeFactor - 1)
         self._nb = self.pipeline.neighbour_list(st.x, st.y, self.cells, self.cells.cell_size,
                                                 *self._nb)
+        self._ref = (st.x.copy(), st.y.copy())
+        self.list_built += 1
 
     def _grid_args(self):
         st = self.state
