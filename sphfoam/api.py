@@ -113,3 +113,19 @@ def export_vtk(case: "Case | str | Path", times: list[float] | None = None) -> P
     from sphfoam.io.vtk import export_case
 
     return export_case(_path(case), times=times)
+
+
+def prepare_case(case_dir: "Case | str | Path") -> tuple[Path, list[str]]:
+    """Make an existing case open in ParaView (``sphfoam export foam``): the one-cell mesh
+    and ``CASE.foam`` for the domain of its ``system/particleDict``, and every time
+    directory written by an earlier sphfoam rewritten in the cloud layout (values
+    unchanged). Returns the ``.foam`` path and the names of the rewritten times."""
+    from sphfoam.case.times import list_times
+    from sphfoam.io.fields import has_particles, upgrade_state
+    from sphfoam.io.polymesh import write_foam_files
+    from sphfoam.setup.particles import default_domain
+
+    case = _case(case_dir)
+    foam = write_foam_files(case.path, *default_domain(case.particles), case.particles.dx)
+    upgraded = [d.name for _, d in list_times(case.path) if has_particles(d) and upgrade_state(d)]
+    return foam, upgraded

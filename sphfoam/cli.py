@@ -362,7 +362,7 @@ def export_foam(case: Path = typer.Argument(Path("."), help="case directory")):
 
     Time directories of earlier sphfoam versions are rewritten in the cloud layout (values unchanged).
     """
-    from sphfoam.io.polymesh import prepare_case
+    from sphfoam.api import prepare_case
 
     c = _case(case)
     foam, upgraded = _guard(prepare_case, c.path)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["write_foam_files", "write_poly_mesh", "foam_file", "prepare_case"]
+__all__ = ["write_foam_files", "write_poly_mesh", "foam_file"]
 
 # hex vertices 0..7 in OpenFOAM's order (bottom face z0 anticlockwise, then top at z1);
 # faces listed so that the right-hand normal points out of the cell (owner = cell 0)
@@ -85,18 +85,3 @@ def write_foam_files(case_dir: str | Path, lo, hi, thickness: float) -> Path:
         f.write_text("")
     return f
 
-
-def prepare_case(case_dir: str | Path) -> tuple[Path, list[str]]:
-    """Make an existing case open in ParaView (``sphfoam export foam``): the one-cell mesh
-    and ``CASE.foam`` for the domain of its ``system/particleDict``, and every time
-    directory written by an earlier sphfoam rewritten in the cloud layout (values
-    unchanged). Returns the ``.foam`` path and the names of the rewritten times."""
-    from sphfoam.case.case import Case
-    from sphfoam.case.times import list_times
-    from sphfoam.io.fields import has_particles, upgrade_state
-    from sphfoam.setup.particles import default_domain
-
-    case = Case(case_dir)
-    foam = write_foam_files(case.path, *default_domain(case.particles), case.particles.dx)
-    upgraded = [d.name for _, d in list_times(case.path) if has_particles(d) and upgrade_state(d)]
-    return foam, upgraded
