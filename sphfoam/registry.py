@@ -90,6 +90,15 @@ def register(cls: type[Model]) -> type[Model]:
     return cls
 
 
+def unregister(cls: type[Model]) -> None:
+    """Remove a model registered with :func:`register` (models defined outside the package,
+    e.g. in a test, that must not outlive it)."""
+    if _REGISTRY[cls.family].get(cls.name) is cls:
+        del _REGISTRY[cls.family][cls.name]
+    for old in getattr(cls, "aliases", ()):
+        _ALIASES[cls.family].pop(old, None)
+
+
 @dataclass
 class UnknownModel(LookupError):
     family: str

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from numba import njit
 from pydantic import Field
 from scipy.integrate import trapezoid
@@ -96,9 +97,15 @@ class KineticEnergy(FunctionObject):
         self.write_row([sim.time, 0.5 * float(np.sum(st.m[f] * (st.u[f]**2 + st.v[f]**2)))])
 
 
-for _cls in (WendlandC4, ArtificialC0, KineticEnergy):
-    if _cls.name not in registry.names(_cls.family):
-        register(_cls)
+@pytest.fixture(autouse=True)
+def example_models():
+    """Register the three models for this module's tests only (registered at import, they
+    would join the registry-wide parametrisations of other test modules)."""
+    for cls in (WendlandC4, ArtificialC0, KineticEnergy):
+        register(cls)
+    yield
+    for cls in (WendlandC4, ArtificialC0, KineticEnergy):
+        registry.unregister(cls)
 
 
 def test_example_kernel_is_normalised_and_its_gradient_consistent():

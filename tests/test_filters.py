@@ -189,6 +189,34 @@ def test_filter_pass_runs_every_n_steps(shepard, mls, delta):
     assert delta.simulation(linear(x, y)).filter_every == 0
 
 
+def test_filter_pass_runs_before_the_steps_its_schedule_names():
+    """Stepping a simulation: the Shepard pass (every 3 steps) runs before steps 3, 6, 9 (by
+    the run's step index, as after a restart), and only then; Verlet takes an Euler step
+    after each pass (``sim.filtered``)."""
+    setup = Setup({"type": "shepard", "every": 3})
+    x, y = lattice()
+    sim = setup.simulation(RHO0 * (1.0 + 0.001 * np.sin(x / DX)))
+    sim.integrator = registry.build("integrator", {"type": "verlet", "everyN": 1000})
+    ran, flagged = [], []
+    original = sim.filter_density
+
+    def recording():
+        ran.append(sim.step_index)
+        original()
+
+    sim.filter_density = recording
+    for _ in range(10):
+        sim.step()
+        flagged.append(sim.filtered)
+    assert ran == [3, 6, 9]
+    assert flagged == [i in (3, 6, 9) for i in range(10)]
+    sim.step_index = 14                     # a run restarted at step 14: next pass at 15
+    ran.clear()
+    sim.step()
+    sim.step()
+    assert ran == [15]
+
+
 def test_mls_falls_back_to_shepard_for_an_isolated_pair(mls, shepard):
     """Two particles (collinear neighbourhood): A is singular, the guard gives Shepard."""
     x = np.array([5.0, 5.0 + DX, 12.0])

@@ -459,7 +459,11 @@ def fill_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, n
         xa = x[a]
         ya = y[a]
         k = nb_start[a]
-{_block(asm.cell_walk("nb_idx[k] = b" + chr(10) + "k += 1"), 8)}
+        k_end = nb_start[a + 1]
+{_block(asm.cell_walk("if k < k_end:" + chr(10) + "    nb_idx[k] = b" + chr(10) + "    k += 1"), 8)}
+        while k < k_end:            # (never: the count pass walked the same cells)
+            nb_idx[k] = a
+            k += 1
 ''')
     if asm.has_stage("prepass"):
         pre = asm.stage("prepass", "all")

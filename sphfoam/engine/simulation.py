@@ -164,7 +164,7 @@ class Simulation:
         x1 = cl.x0 + cl.ncx * cl.cell_size
         y1 = cl.y0 + cl.ncy * cl.cell_size
         d2, v2, out = displacement_check(st.x, st.y, ref[0], ref[1], st.u, st.v, cl.x0, cl.y0,
-                                         x1, y1, cl.lx > 0.0, cl.ly > 0.0)
+                                         x1, y1, cl.lx, cl.ly)
         if out:
             return False
         reach = math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt
