@@ -224,7 +224,7 @@ def check(case: Path = typer.Argument(Path("."), help="case directory, or a stud
     t = Table(title=f"{escape_(c.name)}: valid", show_header=False)
     for fam, m in c.models.sph.items():
         t.add_row(fam, escape_(m.name),
-                  escape_(dict(m.coeffs)) if m.coeffs.model_fields else "")
+                  escape_(dict(m.coeffs)) if type(m.coeffs).model_fields else "")
     t.add_row("integrator", escape_(c.models.integrator.name), "")
     for name, fo in c.models.functions.items():
         t.add_row("function", escape_(f"{name} ({fo.name})"), "")
