@@ -164,6 +164,9 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
         raw = {k: v for k, v in foamdict.read(path).items() if k != "FoamFile"}
     except foamdict.FoamDictError as e:
         raise CaseError([Problem(rel, "", f"syntax error: {e}")]) from None
+    except UnicodeDecodeError as e:
+        raise CaseError([Problem(rel, "", f"not a text dictionary: byte {e.object[e.start]:#04x} "
+                                 f"at offset {e.start} is not UTF-8")]) from None
     try:
         spec = StudyDict.model_validate(raw)
     except ValidationError as e:

@@ -52,8 +52,10 @@ def study_dicts(path: Path) -> list[Path]:
     return out
 
 
-def check_case(path: Path | str) -> CheckReport:
-    """Validate every dictionary of the case at ``path`` (CaseError with all problems)."""
+def check_case(path: Path | str, study_runs: bool = True) -> CheckReport:
+    """Validate every dictionary of the case at ``path`` (CaseError with all problems).
+    ``study_runs``: also clone and validate every run of each study dictionary
+    (:func:`validate_runs`)."""
     from sphfoam.models.metrics import METRICS_DICT, load_metrics
     from sphfoam import study as st
 
@@ -70,14 +72,63 @@ def check_case(path: Path | str) -> CheckReport:
     if (case.path / METRICS_DICT).is_file():
         try:
             report.metrics = load_metrics(case.path)
+            _check_metrics(report.metrics, case)
         except CaseError as e:
             problems.extend(p for p in e.problems if str(p) not in map(str, problems))
     for f in study_dicts(case.path):
         try:
-            report.studies[f.name] = st.load(f)
+            report.studies[f.name] = s = st.load(f)
+            if study_runs:
+                validate_runs(s)
         except CaseError as e:
-            problems.extend(Problem(p.file if p.file == f.name else f"{f.name}: {p.file}",
-                                    p.key, p.message) for p in e.problems)
+            problems.extend(Problem(p.file if p.file.startswith(f.name) else
+                                    f"{f.name}: {p.file}", p.key, p.message)
+                            for p in e.problems)
     if problems:
         raise CaseError(problems)
     return report
+
+
+def _check_metrics(mset, case: Case) -> None:
+    """Each metric against the function objects of the case's controlDict."""
+    try:
+        functions = case.control.functions
+    except CaseError:
+        return                                  # reported by validate already
+    problems = []
+    for m in mset.metrics.values():
+        try:
+            m.check(functions)
+        except CaseError as e:
+            problems.extend(e.problems)
+    if problems:
+        raise CaseError(problems)
+
+
+def validate_runs(study) -> None:
+    """Every run of a study, cloned with its overrides into a temporary folder and validated
+    (its metrics too), as ``sphfoam study`` would before running anything."""
+    import tempfile
+
+    from sphfoam import study as st
+    from sphfoam.case.edit import clone_case
+    from sphfoam.models.metrics import load_metrics
+
+    problems: list[Problem] = []
+    with tempfile.TemporaryDirectory(prefix="sphfoam-check-") as tmp:
+        for run in study.runs:
+            where = f"{study.source.name}: run {run.name}"
+            try:
+                path = clone_case(study.base, Path(tmp) / run.name, study.edits[run.name],
+                                  ignore=st._inside(study))
+                c = Case(path)
+                c.validate()
+                _check_metrics(load_metrics(path, run.metrics, source=run.source), c)
+            except CaseError as e:
+                problems.extend(Problem(f"{where}: {p.file}", p.key, p.message)
+                                for p in e.problems)
+            except (ValueError, TypeError) as e:   # an override the dictionary cannot hold
+                problems.append(Problem(study.source.name, "variants",
+                                        f"run {run.name}: {e}"))
+    if problems:
+        raise CaseError(problems)

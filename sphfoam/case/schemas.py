@@ -172,6 +172,9 @@ class Gravity(Strict):
     @field_validator("dimensions", mode="before")
     @classmethod
     def _dims(cls, v):
+        if v is not None and not (isinstance(v, (list, tuple)) and all(
+                isinstance(x, (int, float)) for x in v)):
+            raise ValueError(f"expected a dimension set [0 1 -2 0 0 0 0], got {v!r}")
         if v is not None and tuple(int(x) for x in v)[:3] != (0, 1, -2):
             raise ValueError(f"g must have dimensions [0 1 -2 0 0 0 0], got {list(v)}")
         return v

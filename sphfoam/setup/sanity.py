@@ -79,7 +79,7 @@ def estimate(pd: ParticleDict, support: float = 2.0, hdx: float = 1.3) -> tuple[
     from sphfoam.setup.particles import default_domain
 
     dx = pd.dx
-    n = sum(_area(r) for r in pd.fluid.values()) / dx ** 2
+    n = sum(_area(r) for r in pd.fluid.values()) / dx / dx
     n += sum(_wall_length(w) * w.layers / dx for w in pd.walls.values())
     lo, hi = default_domain(pd)
     cell = support * hdx * dx
@@ -136,8 +136,11 @@ def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", suppo
                                         "would be removed at the first step"))
     if problems:
         return problems
-    n, cells = estimate(pd, support, hdx)
-    need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
+    try:
+        n, cells = estimate(pd, support, hdx)
+        need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
+    except (ZeroDivisionError, OverflowError):
+        n = cells = need = math.inf
     memory = machine_memory() if memory is None else memory
     if not math.isfinite(need) or (memory is not None and need > MEMORY_FRACTION * memory):
         have = f"this machine has {_size(memory)}" if memory else "more than is available"
