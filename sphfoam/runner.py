@@ -289,7 +289,13 @@ def _run(case, c, log, progress, t_end) -> RunReport:
             if sim.time >= t_end - eps:
                 wrote = True
             if wrote:
-                written.append(_write(case, sim, log))
+                try:
+                    written.append(_write(case, sim, log))
+                except OSError as e:
+                    _log_quietly(log, f"could not write the state at time {sim.time:.6g}: "
+                                 f"{e.strerror or e}; the time directories written before "
+                                 "are complete (restart from the latest)")
+                    raise
                 _purge(written, c.purgeWrite)
                 while t_write <= sim.time + eps:
                     t_write = next_write_time(t_write)
@@ -372,6 +378,14 @@ def _write(case, sim, log) -> Path:
     log(f"time {folder.name}: written (step {sim.step_index}, dt {sim.last_dt:.4g}, "
         f"KE {sim.kinetic_energy():.4g} J/m)")
     return folder
+
+
+def _log_quietly(log, msg: str) -> None:
+    """Log ``msg`` if the log can still be written (not on a full or read-only disk)."""
+    try:
+        log(msg)
+    except OSError:
+        pass
 
 
 def _purge(written: list[Path], keep: int):
