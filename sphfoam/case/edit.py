@@ -9,7 +9,9 @@ from sphfoam.case import foamdict
 
 #: what a clone leaves behind: results of the source case
 RESULTS = ("[1-9]*", "0.*", "postProcessing", "VTK", "log.*", "lagrangian", "uniform",
-           "compare", "runUp", "study", "studySmall", "stability")
+           "compare", "runUp", "study", "studySmall", "stability",
+           # a running case's lock and the remains of interrupted writes (sphfoam.io.timedirs)
+           ".sphfoam.lock", ".*.writing-*", ".*.replaced-*")
 
 
 def set_entry(case: Path, rel: str, key: str, value) -> None:
