@@ -81,7 +81,7 @@ def write_time_dir(case_path: Path, name: str, fields: dict[str, np.ndarray],
         write_state(tmp, fields, fmt=fmt, precision=precision)
         n = len(next(iter(fields.values()))) if fields else 0
         entries = {**time, "name": foamdict.QuotedString(name), "particles": int(n),
-                   "fields": [foamdict.QuotedString(k) for k in fields]}
+                   "fields": [foamdict.QuotedString(k) for k in sorted(fields)]}
         foamdict.write(tmp / "uniform" / "time", entries,
                        header={"class": "dictionary", "location": f"{name}/uniform",
                                "object": "time"})
