@@ -70,6 +70,9 @@ def _handle(e: BaseException, command: str):
         elif isinstance(e, Interrupted):
             err_console.print("[yellow]interrupted: the current state was NOT written; "
                               f"the latest complete time directory is {escape_(e.latest)}.")
+        elif command == "run":
+            err_console.print("[yellow]interrupted before the time loop started: no state was "
+                              "written by this run (the state was NOT written).")
         else:
             err_console.print(f"[yellow]interrupted: {escape_(command)} stopped.")
         raise typer.Exit(EXIT_INTERRUPTED)
