@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Literal, Optional
 
@@ -41,25 +40,98 @@ _flags_take_no_value()
 _state = {"debug": False}
 
 
-def _fail(title: str, body: str, code: int = 2):
-    err_console.print(Panel(body, title=title, border_style="red", expand=False))
+#: exit codes (README, docs/user-guide.md): 0 ok, 1 OS error, 2 case error, 3 blow-up,
+#: 130 interrupted
+EXIT_OS, EXIT_CASE, EXIT_BLOWUP, EXIT_INTERRUPTED = 1, 2, 3, 130
+
+
+def _fail(title: str, body: str, code: int = EXIT_CASE, markup: bool = False):
+    """One red panel on stderr, then exit ``code``. ``body`` is plain text (escaped here, so
+    user words such as ``[/bold]`` print as written) unless ``markup``."""
+    from rich.markup import escape
+
+    err_console.print(Panel(body if markup else escape(body), title=escape(title),
+                            border_style="red", expand=False))
     raise typer.Exit(code)
+
+
+def _os_error_text(e: OSError) -> str:
+    where = f"{e.filename}: " if getattr(e, "filename", None) else ""
+    what = e.strerror or str(e)
+    return f"{where}{what}" + (f" (and {e.filename2})" if getattr(e, "filename2", None) else "")
+
+
+def _handle(e: BaseException, command: str):
+    """The one screen a failed command prints; never a traceback (unless --debug)."""
+    from sphfoam.case.errors import CaseError
+
+    if type(e).__module__.split(".")[0] in ("click", "typer"):    # typer.Exit and friends
+        raise e
+    if _state["debug"]:
+        raise e
+    if isinstance(e, CaseError):
+        _fail("case error", "\n".join(f"• {p}" for p in e.problems))
+    if isinstance(e, KeyboardInterrupt):
+        from sphfoam.runner import Interrupted
+
+        if isinstance(e, Interrupted) and e.written:
+            err_console.print("[yellow]interrupted: the current state was written to "
+                              f"{escape_(e.written)}; `sphfoam run` continues from it "
+                              "(startFrom latestTime).")
+        elif isinstance(e, Interrupted):
+            err_console.print("[yellow]interrupted: the current state was NOT written; "
+                              f"the latest complete time directory is {escape_(e.latest)}.")
+        elif command == "run":
+            err_console.print("[yellow]interrupted before the time loop started: no state was "
+                              "written by this run (the state was NOT written).")
+        else:
+            err_console.print(f"[yellow]interrupted: {escape_(command)} stopped.")
+        raise typer.Exit(EXIT_INTERRUPTED)
+    if isinstance(e, MemoryError):
+        _fail("out of memory", f"{command}: not enough memory (MemoryError); a coarser dx "
+              "or fewer particles would fit", code=EXIT_OS)
+    if isinstance(e, OSError):
+        hint = ""
+        if command == "run":
+            hint = ("\nthe time directories written before are complete: `sphfoam run` "
+                    "restarts from the latest (startFrom latestTime)")
+        _fail("error", f"{type(e).__name__}: {_os_error_text(e)}{hint}", code=EXIT_OS)
+    if isinstance(e, (ValueError, KeyError, LookupError, UnicodeError)):
+        _fail("error", f"{type(e).__name__}: {e}")
+    _fail("internal error", f"{command}: {type(e).__name__}: {e}\nthis is a bug in sphfoam; "
+          "`sphfoam --debug ...` shows the traceback", code=EXIT_OS)
+
+
+def escape_(text) -> str:
+    from rich.markup import escape
+
+    return escape(str(text))
 
 
 def _guard(fn, *args, **kwargs):
     """Run ``fn``; turn user-facing errors into one screen, no traceback (unless --debug)."""
-    from sphfoam.case.errors import CaseError
-
     try:
         return fn(*args, **kwargs)
-    except CaseError as e:
-        if _state["debug"]:
+    except BaseException as e:   # noqa: BLE001 -- every outcome gets its screen or exit code
+        if isinstance(e, SystemExit):
             raise
-        _fail("case error", "\n".join(f"• {p}" for p in e.problems))
-    except (FileNotFoundError, ValueError, KeyError) as e:
-        if _state["debug"]:
-            raise
-        _fail("error", f"{type(e).__name__}: {e}")
+        _handle(e, getattr(fn, "__name__", "sphfoam"))
+
+
+def _guarded(fn):
+    """A command whose every error (user, OS, Ctrl-C) becomes one screen and an exit code."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except BaseException as e:   # noqa: BLE001
+            if isinstance(e, SystemExit):
+                raise
+            _handle(e, fn.__name__.replace("export_", "export "))
+
+    return wrapper
 
 
 def _case(path: Path):
@@ -91,6 +163,7 @@ def main_callback(debug: bool = typer.Option(False, "--debug", help="show traceb
 
 
 @app.command()
+@_guarded
 def run(case: Path = typer.Argument(Path("."), help="case directory"),
         threads: Optional[int] = typer.Option(None, "--threads", "-j", help="numba threads"),
         end_time: Optional[float] = typer.Option(None, "--end-time",
@@ -103,16 +176,12 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
     _threads(threads)
     c = _case(case)
     try:
-        rep = _guard(run_case, c, progress=not no_progress and console.is_terminal,
-                     echo=_echo, end_time=end_time, console=console)
+        rep = run_case(c, progress=not no_progress and console.is_terminal, echo=_echo,
+                       end_time=end_time, console=console)
     except BlowUp as e:
         if _state["debug"]:
             raise
-        _fail("blow-up", _blow_up_text(e.diagnosis, c.path), code=3)
-    except KeyboardInterrupt:
-        err_console.print("[yellow]interrupted: the current state was written; "
-                          "`sphfoam run` continues from it (startFrom latestTime).")
-        raise typer.Exit(130)
+        _fail("blow-up", _blow_up_text(e.diagnosis, c.path), code=EXIT_BLOWUP, markup=True)
     _say(f"[green]done[/]: {rep.steps} steps, {rep.particles} particles, run "
                   f"{rep.run_seconds:.1f} s + compile {rep.compile_seconds:.1f} s "
                   f"({'cached' if rep.cache_hit else 'cold'}); "
@@ -146,6 +215,7 @@ def _blow_up_text(d, path: Path) -> str:
 
 
 @app.command()
+@_guarded
 def setup(case: Path = typer.Argument(Path("."), help="case directory"),
           force: bool = typer.Option(False, "--force", help="overwrite existing particles in 0/")):
     """Generate particles from system/particleDict into 0/ (hydrostatic, at rest).
@@ -158,28 +228,47 @@ def setup(case: Path = typer.Argument(Path("."), help="case directory"),
     c = _case(case)
     if has_particles(c.path / "0") and not force:
         _fail("setup", f"{c.path / '0'} already holds particles; use --force to overwrite")
-    _guard(setup_case, c, _say)
+    setup_case(c, _echo)
 
 
 @app.command()
-def check(case: Path = typer.Argument(Path("."), help="case directory")):
-    """Validate every dictionary of CASE without running it."""
-    c = _case(case)
-    _guard(c.validate)
+@_guarded
+def check(case: Path = typer.Argument(Path("."), help="case directory, or a study "
+                                      "dictionary")):
+    """Validate every dictionary of CASE without running it (system/, constant/,
+    system/metricsDict and the study dictionaries beside them); or one study dictionary."""
+    from sphfoam.case.check import check_case
+
+    if case.is_file():
+        from sphfoam import study as st
+
+        s = st.load(case)
+        console.print(f"{escape_(case.name)}: valid, {len(s.runs)} run(s) of base case "
+                      f"{escape_(s.base)} in {escape_(s.root)}")
+        return
+    _case(case)
+    rep = check_case(case)
+    c = rep.case
     ctx = c.context
-    t = Table(title=f"{c.name}: valid", show_header=False)
+    t = Table(title=f"{escape_(c.name)}: valid", show_header=False)
     for fam, m in c.models.sph.items():
-        t.add_row(fam, m.name, str(dict(m.coeffs)) if m.coeffs.model_fields else "")
-    t.add_row("integrator", c.models.integrator.name, "")
+        t.add_row(fam, escape_(m.name),
+                  escape_(dict(m.coeffs)) if type(m.coeffs).model_fields else "")
+    t.add_row("integrator", escape_(c.models.integrator.name), "")
     for name, fo in c.models.functions.items():
-        t.add_row("function", f"{name} ({fo.name})", "")
+        t.add_row("function", escape_(f"{name} ({fo.name})"), "")
     t.add_row("dx, h, c0", f"{ctx.dx:g} m, {ctx.h:g} m, {ctx.c0:.4g} m/s", "")
     t.add_row("time", f"0 .. {c.control.endTime:g} s, write every {c.control.writeInterval:g} "
               f"({c.control.writeControl})", "")
+    if rep.metrics is not None:
+        t.add_row("metricsDict", escape_(", ".join(rep.metrics.metrics)), "")
+    for name, s in rep.studies.items():
+        t.add_row("study", escape_(name), f"{len(s.runs)} run(s)")
     console.print(t)
 
 
 @app.command()
+@_guarded
 def models(family: Optional[str] = typer.Argument(None, help="only this family")):
     """List the registered models (the words you may write after `type`)."""
     from sphfoam import registry
@@ -206,6 +295,7 @@ def models(family: Optional[str] = typer.Argument(None, help="only this family")
 
 
 @app.command()
+@_guarded
 def sample(case: Path = typer.Argument(Path("."), help="case directory"),
            func: Optional[list[str]] = typer.Option(None, "--func", "-f",
                                                     help="only this function object")):
@@ -213,10 +303,11 @@ def sample(case: Path = typer.Argument(Path("."), help="case directory"),
     from sphfoam.postprocess import sample as do_sample
 
     c = _case(case)
-    _guard(do_sample, c.path, func, log=_say)
+    do_sample(c.path, func, log=_echo)
 
 
 @app.command()
+@_guarded
 def plot(case: Path = typer.Argument(Path("."), help="case directory"),
          theory: str = typer.Option("mcCowan", "--theory", help="wave theory to compare with "
                                     "(sphfoam models waveTheory)"),
@@ -236,6 +327,7 @@ def plot(case: Path = typer.Argument(Path("."), help="case directory"),
 
 
 @app.command()
+@_guarded
 def render(case: Path = typer.Argument(Path("."), help="case directory"),
            field: str = typer.Option("U", "--field", "-f", help="colour by this field: U "
                                      "(|U|), Ux, Uy, p, rho or any scalar field written"),
@@ -258,6 +350,7 @@ def render(case: Path = typer.Argument(Path("."), help="case directory"),
 
 
 @app.command()
+@_guarded
 def study(studydict: Path = typer.Argument(..., help="study dictionary"),
           jobs: Optional[int] = typer.Option(None, "--jobs", "-n",
                                              help="runs at once (default: the dictionary's jobs)"),
@@ -275,25 +368,25 @@ def study(studydict: Path = typer.Argument(..., help="study dictionary"),
     """
     from sphfoam import study as st
 
-    s = _guard(st.load, studydict, only)
+    s = st.load(studydict, only)
     if dry_run:
         t = Table(title=f"{studydict.name}: {len(s.runs)} run(s) in {s.root}")
         for c in ("run", "dx", "overrides"):
             t.add_column(c)
         for r in st.dump(s):
-            t.add_row(r["name"], "" if r["dx"] is None else f"{r['dx']:g}",
-                      "; ".join(f"{k} {v}" for k, v in r["edits"].items()))
+            t.add_row(escape_(r["name"]), "" if r["dx"] is None else f"{r['dx']:g}",
+                      escape_("; ".join(f"{k} {v}" for k, v in r["edits"].items())))
         console.print(t)
         return
     if collect_only:
         rows = st.collect(s)
     else:
-        rows = _guard(st.run_study, s, jobs=jobs, scheduler=scheduler, rerun=rerun,
-                      log=_say)
-    console.print((s.root / "study.md").read_text() if rows else "no results yet")
+        rows = st.run_study(s, jobs=jobs, scheduler=scheduler, rerun=rerun, log=_echo)
+    console.print(escape_((s.root / "study.md").read_text()) if rows else "no results yet")
 
 
 @app.command()
+@_guarded
 def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
             keep_going: bool = typer.Option(False, "--keep-going", "-k",
                                             help="show a metric that cannot be evaluated as "
@@ -333,15 +426,16 @@ def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
                      else "left")
     for name, mv in values.items():
         label = f"{name} (pareto)" if name == mset.pareto else name
-        t.add_row(label, mset.metrics[name].name, num(mv.value, ".6g"),
-                  num(mv.reference, ".6g"), num(mv.error, "+.3f"), mv.unit)
+        t.add_row(escape_(label), escape_(mset.metrics[name].name), num(mv.value, ".6g"),
+                  num(mv.reference, ".6g"), num(mv.error, "+.3f"), escape_(mv.unit))
     console.print(t)
     for name, mv in values.items():
         if mv.problem:
-            err_console.print(f"[yellow]{name}[/]: {mv.problem}")
+            err_console.print(f"[yellow]{escape_(name)}[/]: {escape_(mv.problem)}")
 
 
 @export_app.command("vtk")
+@_guarded
 def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
                time: Optional[list[float]] = typer.Option(None, "--time", "-t",
                                                           help="only these times")):
@@ -353,10 +447,11 @@ def export_vtk(case: Path = typer.Argument(Path("."), help="case directory"),
 
     c = _case(case)
     pvd = _guard(export_case, c.path, times=time)
-    _say(f"wrote {pvd}")
+    _say(f"wrote {escape_(pvd)}")
 
 
 @export_app.command("foam")
+@_guarded
 def export_foam(case: Path = typer.Argument(Path("."), help="case directory")):
     """Make CASE open in ParaView's OpenFOAM reader: write CASE.foam and the one-cell mesh.
 
@@ -367,9 +462,9 @@ def export_foam(case: Path = typer.Argument(Path("."), help="case directory")):
     c = _case(case)
     foam, upgraded = _guard(prepare_case, c.path)
     if upgraded:
-        console.print(f"rewrote {len(upgraded)} time director{'y' if len(upgraded) == 1 else 'ies'}"
-                      f" in the OpenFOAM cloud layout: {', '.join(upgraded)}")
-    console.print(f"wrote {foam} and {c.path / 'constant' / 'polyMesh'}: paraview {foam}")
+        _say(f"rewrote {len(upgraded)} time director{'y' if len(upgraded) == 1 else 'ies'}"
+             f" in the OpenFOAM cloud layout: {escape_(', '.join(upgraded))}")
+    _say(escape_(f"wrote {foam} and {c.path / 'constant' / 'polyMesh'}: paraview {foam}"))
 
 
 def main():

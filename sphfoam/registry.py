@@ -39,9 +39,10 @@ FAMILIES: dict[str, str] = {
 
 
 class Coeffs(BaseModel):
-    """Base of every model's coefficient schema: unknown keys are errors."""
+    """Base of every model's coefficient schema: unknown keys are errors, and so are
+    non-finite numbers (inf, nan, 1e400)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Model:

@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 
 from sphfoam import __version__
-from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
 from sphfoam.case.schemas import SPH_FAMILIES
@@ -27,8 +26,10 @@ from sphfoam.engine.simulation import Simulation
 from sphfoam.case.case import SPH_PROPERTIES
 from sphfoam.engine.state import GHOST, WALL, ParticleState
 from sphfoam.setup.geometry import segments_of
-from sphfoam.io.fields import has_particles, read_state, write_state
+from sphfoam.io.fields import has_particles, read_state
 from sphfoam.io.polymesh import write_foam_files
+from sphfoam.io.timedirs import (case_lock, check_time_dir, read_time_dict, recover,
+                                  write_time_dir)
 from sphfoam.setup.particles import default_domain, generate
 
 
@@ -72,6 +73,11 @@ class RunReport:
 def setup_case(case: Case, log=print) -> ParticleState:
     """Generate particles from system/particleDict and write them to ``0/``."""
     case.validate()
+    with case_lock(case.path, "setup"):
+        return _setup(case, log)
+
+
+def _setup(case: Case, log) -> ParticleState:
     sph = case.models.sph
     eos = sph["equationOfState"]
     state = generate(case.particles, case.context, eos, boundary=sph["boundary"],
@@ -89,34 +95,50 @@ def setup_case(case: Case, log=print) -> ParticleState:
 
 def write_time(case: Case, state: ParticleState, t: float, index: int, dt: float, p=None,
                name: str | None = None) -> Path:
+    """Write a time directory atomically (sphfoam.io.timedirs): complete or not at all."""
     c = case.control
-    folder = case.path / (name or time_name(t, c.timePrecision))
-    write_state(folder, state.to_fields(p), fmt=c.writeFormat, precision=c.writePrecision)
-    foamdict.write(folder / "uniform" / "time",
-                   {"value": float(t), "name": foamdict.QuotedString(folder.name), "index": int(index),
-                    "deltaT": float(dt)},
-                   header={"class": "dictionary", "location": f"{folder.name}/uniform",
-                           "object": "time"})
-    return folder
+    return write_time_dir(case.path, name or time_name(t, c.timePrecision), state.to_fields(p),
+                          {"value": float(t), "index": int(index), "deltaT": float(dt)},
+                          fmt=c.writeFormat, precision=c.writePrecision)
 
 
 def read_time_value(folder: Path) -> tuple[float, int]:
     f = folder / "uniform" / "time"
     if f.is_file():
-        d = foamdict.read(f)
+        d = read_time_dict(folder)
         return float(d["value"]), int(d.get("index", 0))
     return float(folder.name), 0
 
 
-def start_folder(case: Case) -> Path | None:
+def start_folder(case: Case, log=None) -> Path | None:
+    """The time directory to start from: the latest (startFrom latestTime) or startTime's,
+    complete (sphfoam.io.timedirs.check_time_dir). Incomplete directories are skipped, each
+    with a log line saying why; None when no directory has particles at all."""
     times = [(t, p) for t, p in list_times(case.path) if has_particles(p)]
     if not times:
         return None
+    skipped = []
     if case.control.startFrom == "latestTime":
-        return times[-1][1]
+        for t, p in reversed(times):
+            why, _ = check_time_dir(p)
+            if why is None:
+                break
+            skipped.append((p, why))
+            if log:
+                log(f"skipping time directory {p.name}: {why}")
+        else:
+            raise CaseError.single(
+                "system/controlDict", "startFrom", "no complete time directory to start from: "
+                + "; ".join(f"{p.name}: {why}" for p, why in skipped)
+                + " (run 'sphfoam setup --force' to start again from 0)")
+        return p
     want = case.control.startTime
     for t, p in times:
         if abs(t - want) <= 1e-9 * max(1.0, abs(want)):
+            why, _ = check_time_dir(p)
+            if why is not None:
+                raise CaseError.single("system/controlDict", "startTime",
+                                       f"time directory {p.name} is incomplete: {why}")
             return p
     raise CaseError.single("system/controlDict", "startTime",
                            f"no time directory with particles at {want:g}; have: "
@@ -182,17 +204,29 @@ def run_case(case: Case | str | Path, *, progress: bool = True, echo=print,
     case = case if isinstance(case, Case) else Case(case)
     case.validate()
     c = case.control
-    log = Log(case.path / "log.sphfoam", echo)
-    try:
-        return _run(case, c, log, progress, end_time if end_time is not None else c.endTime,
-                    console)
-    finally:
-        log.close()
+    with case_lock(case.path):
+        log = Log(case.path / "log.sphfoam", echo)
+        try:
+            return _run(case, c, log, progress,
+                        end_time if end_time is not None else c.endTime, console)
+        finally:
+            log.close()
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C ended the run; ``written`` is the time directory holding the state at the
+    interruption, or None when it was not written (a second Ctrl-C stops at once, mid-step,
+    or during that write); ``latest`` is the latest complete time directory either way."""
+
+    def __init__(self, written: str | None, latest: str | None):
+        super().__init__(written)
+        self.written, self.latest = written, latest
 
 
 def _run(case, c, log, progress, t_end, console=None) -> RunReport:
     log(f"sphfoam {__version__}: case {case.path}")
-    folder = start_folder(case)
+    recover(case.path, log)
+    folder = start_folder(case, log)
     if folder is None:
         log("no particles in any time directory: running setup first")
         setup_case(case, log)
@@ -255,7 +289,13 @@ def _run(case, c, log, progress, t_end, console=None) -> RunReport:
                     raise BlowUp(diagnosis, report)
             wrote = writes.due(sim.step_index, sim.time, t_prev) or sim.time >= t_end - eps
             if wrote:
-                written.append(_write(case, sim, log))
+                try:
+                    written.append(_write(case, sim, log))
+                except OSError as e:
+                    _log_quietly(log, f"could not write the state at time {sim.time:.6g}: "
+                                 f"{e.strerror or e}; the time directories written before "
+                                 "are complete (restart from the latest)")
+                    raise
                 sim.invalidate_neighbours()
                 _purge(written, c.purgeWrite)
             for fo in functions.values():
@@ -263,10 +303,20 @@ def _run(case, c, log, progress, t_end, console=None) -> RunReport:
                     fo.execute(sim)
             bar.update(sim, dt)
     except KeyboardInterrupt:
-        # Ctrl-C only raises a flag (see _StopRequest), so the state here is a whole step
+        latest = written[-1].name if written else start_name
+        if stop.hard:                     # a second Ctrl-C: stopped at once, maybe mid-step
+            log(f"interrupted twice at time {sim.time:.6g}: stopped at once; the current "
+                f"state was NOT written (latest complete time directory: {latest})")
+            raise Interrupted(None, latest) from None
+        # the first Ctrl-C only raises a flag (see _StopRequest): the state is a whole step
         log(f"interrupted at time {sim.time:.6g}: writing the current state")
-        written.append(_write(case, sim, log))
-        raise
+        try:
+            written.append(_write(case, sim, log))
+        except KeyboardInterrupt:         # the write is atomic: nothing half-written is left
+            log(f"interrupted again while writing: the current state was NOT written "
+                f"(latest complete time directory: {latest})")
+            raise Interrupted(None, latest) from None
+        raise Interrupted(written[-1].name, written[-1].name) from None
     finally:
         stop.restore()
         bar.close()
@@ -335,6 +385,14 @@ def _write(case, sim, log) -> Path:
     return folder
 
 
+def _log_quietly(log, msg: str) -> None:
+    """Log ``msg`` if the log can still be written (not on a full or read-only disk)."""
+    try:
+        log(msg)
+    except OSError:
+        pass
+
+
 def _purge(written: list[Path], keep: int):
     if keep > 0:
         while len(written) > keep:
@@ -350,12 +408,14 @@ class _StopRequest:
         import threading
 
         self.requested = False
+        self.hard = False
         self._previous = None
         if threading.current_thread() is threading.main_thread():
             self._previous = signal.signal(signal.SIGINT, self._handle)
 
     def _handle(self, signum, frame):
         if self.requested:
+            self.hard = True
             raise KeyboardInterrupt
         self.requested = True
 

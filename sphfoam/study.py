@@ -31,6 +31,7 @@ from pydantic import Field, ValidationError, field_validator
 
 from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
+from sphfoam.case.paths import check_name, inside
 from sphfoam.case.schemas import SPH_FAMILIES, Strict
 
 RESULT = "result.json"
@@ -42,7 +43,8 @@ class StudyDict(Strict):
     baseCase: str = Field(".", description="the case every run is cloned from, relative to "
                           "the study dictionary's folder")
     directory: str = Field("study", description="where the runs and the tables go, relative to "
-                           "the study dictionary's folder")
+                           "the study dictionary's folder (and inside it), or an absolute "
+                           "path to put them elsewhere on purpose")
     resolutions: list[float] = Field(default_factory=list, description=(
         "particle spacings dx (m) to run every variant at; empty: the base case's dx"))
     set: dict[str, Any] = Field(default_factory=dict, description=(
@@ -162,6 +164,9 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
         raw = {k: v for k, v in foamdict.read(path).items() if k != "FoamFile"}
     except foamdict.FoamDictError as e:
         raise CaseError([Problem(rel, "", f"syntax error: {e}")]) from None
+    except UnicodeDecodeError as e:
+        raise CaseError([Problem(rel, "", f"not a text dictionary: byte {e.object[e.start]:#04x} "
+                                 f"at offset {e.start} is not UTF-8")]) from None
     try:
         spec = StudyDict.model_validate(raw)
     except ValidationError as e:
@@ -170,6 +175,10 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
     if not (base / "system" / "controlDict").is_file():
         raise CaseError.single(rel, "baseCase", f"{base} is not a case (no system/controlDict)")
     root = (path.parent / spec.directory).resolve()
+    if not Path(spec.directory).is_absolute() and not inside(root, path.parent):
+        raise CaseError.single(rel, "directory", f"{spec.directory!r} lies outside the study "
+                               f"dictionary's folder {path.parent}; give an absolute path to "
+                               "put the study elsewhere on purpose")
     if root == base or root in base.parents or (root.parent == base and root.name in
                                                  ("system", "constant", "0")):
         raise CaseError.single(rel, "directory", "must not be the base case, a folder holding "
@@ -177,6 +186,16 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
     study = Study(path, spec, base, root)
     files = _dict_files(base)
     problems: list[Problem] = []
+
+    def named(where: str, name) -> bool:
+        """A variant's, level's or run's name becomes a folder of the study: one plain
+        path component, never '..' or '/abs'."""
+        try:
+            check_name(name)
+            return True
+        except ValueError as e:
+            problems.append(Problem(rel, where, str(e)))
+            return False
 
     def edits_of(where: str, overrides: dict) -> tuple[str, dict]:
         out, desc = {}, ""
@@ -200,7 +219,8 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
                 problems.append(Problem(rel, f"axes.{axis}", "expected level { overrides } "
                                         "entries"))
                 continue
-            levels.append([(str(n), *edits_of(f"axes.{axis}.{n}", ov)) for n, ov in lv.items()])
+            levels.append([(str(n), *edits_of(f"axes.{axis}.{n}", ov)) for n, ov in lv.items()
+                           if named(f"axes.{axis}.{n}", n)])
         for combo in itertools.product(*levels):
             name = "_".join(c[0] for c in combo)
             desc = ", ".join(c[1] for c in combo if c[1])
@@ -209,6 +229,8 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
                 ed.update(c[2])
             variants.append((name, desc, ed))
     for name, ov in spec.variants.items():
+        if not named(f"variants.{name}", name):
+            continue
         if not isinstance(ov, dict):
             problems.append(Problem(rel, f"variants.{name}", "expected a sub-dictionary of "
                                     "overrides"))
@@ -260,6 +282,11 @@ def prepare(study: Study, rerun: bool = False) -> list[RunSpec]:
     todo, problems = [], []
     for run in study.runs:
         path = Path(run.path)
+        if path.is_symlink() or path.parent.resolve() != study.root or path.name in (
+                "", ".", ".."):
+            # run names are plain names (load checks them): this is a guard, never reached
+            raise CaseError.single(study.source.name, "variants", f"run folder {path} is not "
+                                   f"a plain folder directly inside the study {study.root}")
         if not rerun and (path / RESULT).is_file():
             continue
         clone_case(study.base, path, study.edits[run.name], ignore=_inside(study))

@@ -73,6 +73,9 @@ class Case:
             return _strip_header(foamdict.read(f, filename=rel, case_dir=self.path))
         except foamdict.FoamDictError as e:
             raise CaseError([Problem(rel, "", f"syntax error: {e}")]) from None
+        except UnicodeDecodeError as e:
+            raise CaseError([Problem(rel, "", f"not a text dictionary: byte {e.object[e.start]:#04x} "
+                                     f"at offset {e.start} is not UTF-8")]) from None
 
     def _validated(self, key: str):
         rel, schema = FILES[key]
@@ -217,6 +220,13 @@ class Case:
                 getattr(self, attr)
             except CaseError as e:
                 problems.extend(p for p in e.problems if str(p) not in map(str, problems))
+        if problems:
+            raise CaseError(problems)
+        from sphfoam.setup.sanity import geometry_problems
+
+        kernel = self.models.sph["kernel"]
+        problems = geometry_problems(self.particles, FILES["particleDict"][0],
+                                     kernel.support, kernel.coeffs.hdx)
         if problems:
             raise CaseError(problems)
         if not math.isfinite(self.context.c0) or self.context.c0 <= 0:

@@ -52,6 +52,13 @@ def _fields_at(model_cls, loc) -> list[str]:
     return list(getattr(cls, "model_fields", {}) or [])
 
 
+def _short(value, limit: int = 80) -> str:
+    """``repr(value)``, cut to ``limit`` characters (a value that swallowed the rest of a
+    file, e.g. after a missing ';', must not fill the screen)."""
+    r = repr(value)
+    return r if len(r) <= limit else r[:limit - 5] + " ...)"
+
+
 def from_validation(err: ValidationError, file: str, model_cls=None, prefix: str = "") -> CaseError:
     """Translate pydantic's errors into :class:`Problem` lines."""
     problems = []
@@ -69,12 +76,13 @@ def from_validation(err: ValidationError, file: str, model_cls=None, prefix: str
             expected = e.get("ctx", {}).get("expected", "")
             choices = [c.strip().strip("'") for c in expected.replace(" or ", ",").split(",")]
             choices = [c for c in choices if c]
-            msg = (f"'{bad}' is not valid{did_you_mean(bad, choices)} "
+            shown = f"'{bad}'" if isinstance(bad, str) and len(bad) <= 80 else _short(bad)
+            msg = (f"{shown} is not valid{did_you_mean(bad, choices)} "
                    f"valid choices: {', '.join(choices)}")
         elif kind == "missing":
             msg = "required key is missing"
         else:
-            msg = f"{e['msg']} (got {bad!r})" if bad is not None and not isinstance(bad, dict) \
-                else e["msg"]
+            msg = f"{e['msg']} (got {_short(bad)})" if bad is not None and \
+                not isinstance(bad, dict) else e["msg"]
         problems.append(Problem(file, key, msg))
     return CaseError(problems)

@@ -17,7 +17,10 @@ from sphfoam.case.foamdict import DimensionSet
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+    """Base of every dictionary schema: unknown keys are errors, and so are inf and nan (as
+    written, or a literal such as 1e400 that overflows to inf) in any number."""
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
 
 
 def _vector2(v: Any) -> tuple[float, float]:
@@ -112,8 +115,21 @@ class ControlDict(Strict):
         "blow-up detection after every step: { enabled yes; densityRatio (0.5 2); maxSpeed 1; "
         "maxEscaped 0.05; minDeltaT 1e-3; maxKineticEnergy 4; }"))
 
+    @field_validator("functions")
+    @classmethod
+    def _names(cls, v):
+        from sphfoam.case.paths import check_name
+
+        for name in v:      # each names a folder postProcessing/<name>/
+            check_name(name)
+        return v
+
     @model_validator(mode="after")
     def _check(self):
+        if self.endTime / self.writeInterval > 1e6 and self.writeControl != "timeStep":
+            raise ValueError(f"writeInterval {self.writeInterval:g} would write "
+                             f"{self.endTime / self.writeInterval:.3g} time directories "
+                             f"before endTime {self.endTime:g} (at most a million)")
         if self.writeControl == "timeStep" and self.writeInterval != int(self.writeInterval):
             raise ValueError("writeInterval must be a whole number of steps with "
                              "writeControl timeStep")
@@ -166,7 +182,7 @@ class Gravity(Strict):
             raise ValueError(f"g is read in SI units: [{v.units}] is not m/s^2")
         return v
 
-    model_config = ConfigDict(extra="forbid", arbitrary_types_allowed=True)
+    model_config = ConfigDict(extra="forbid", arbitrary_types_allowed=True, allow_inf_nan=False)
 
 
 #: families chosen in constant/sphProperties, with the default a case gets when it is silent
@@ -308,6 +324,13 @@ class Domain(Strict):
     periodic: list[Literal["x", "y"]] = Field(default_factory=list, description=(
         "periodic axes: a particle leaving through max re-enters through min, and pairs "
         "interact across the seam (channel flows)"))
+
+    @model_validator(mode="after")
+    def _order(self):
+        if not (self.max[0] > self.min[0] and self.max[1] > self.min[1]):
+            raise ValueError(f"domain max {self.max} must exceed min {self.min} in x and y "
+                             "(an empty domain holds no particle)")
+        return self
 
     @field_validator("periodic", mode="before")
     @classmethod

@@ -23,6 +23,7 @@ import numpy as np
 
 import sphfoam
 from sphfoam.engine import terms as T
+from sphfoam.engine.fastmath import FASTMATH_SOURCE
 
 #: the fixed scalar slots every pipeline reads from ``prm`` before the models' own
 CORE_PARAMS = ("h", "inv_h", "support2", "eta2", "gx", "gy")
@@ -429,7 +430,7 @@ FIELDS = {tuple(fields)!r}
 {fld_const}
 
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def equation_of_state(rho, p, c, prm):
 {_block(bind, 4)}
     for a in prange(rho.shape[0]):
@@ -437,7 +438,7 @@ def equation_of_state(rho, p, c, prm):
 ''']
     parts.append(f'''
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def count_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, count):
     """Neighbours of every particle within sqrt(reach2) (the cell side), from the cells."""
 {_block(bind, 4)}
@@ -449,7 +450,7 @@ def count_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, 
         count[a] = n_a
 
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def fill_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, nb_start,
                     nb_idx):
     """The neighbour list: b of particle a in nb_idx[nb_start[a]:nb_start[a + 1]], in the
@@ -469,7 +470,7 @@ def fill_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, n
         pre = asm.stage("prepass", "all")
         parts.append(f'''
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def prepass({_ARGS}):
     """Per-particle quantities the pair terms need: {", ".join(aux)}."""
 {_block(bind, 4)}
@@ -480,7 +481,7 @@ def prepass({_ARGS}):
     fluid_rates = asm.stage("rates", "fluid")
     parts.append(f'''
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
     """dv/dt, drho/dt and sigma of T(3.89) for every particle (gather over neighbours)."""
 {_block(bind, 4)}
@@ -502,7 +503,7 @@ def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
         out_sigma[a] = sigma_a
 
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def density_rate({_ARGS}, out_drho):
     """drho/dt alone (the last stage of Monaghan's 2007 scheme, T(3.96))."""
 {_block(bind, 4)}
@@ -519,7 +520,7 @@ def density_rate({_ARGS}, out_drho):
         step = asm.stage("step", "wall")
         parts.append(f'''
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def step_pass({_ARGS}):
     """Once per step, after the re-sort: per-step state of wall particles."""
 {_block(bind, 4)}
@@ -533,7 +534,7 @@ def step_pass({_ARGS}):
         owner = next(t.owner for t in filt if not t.on_demand)
         parts.append(f'''
 
-@njit(parallel=True, fastmath=True, cache=True)
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def density_filter({_ARGS}, out_rho):
     """{owner.doc}"""
 {_block(bind, 4)}

@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
+from sphfoam.engine.fastmath import FASTMATH
 
-_JIT = dict(cache=True, fastmath=True)
+_JIT = dict(cache=True, fastmath=set(FASTMATH))
 
 
 @njit(cache=True)   # no fastmath: a NaN or infinite position must fail the range test

@@ -12,12 +12,13 @@ import numpy as np
 from numba import njit, prange
 from pydantic import Field
 
+from sphfoam.engine.fastmath import FASTMATH
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
 
-@njit(parallel=True, cache=True, fastmath=True)
+@njit(parallel=True, cache=True, fastmath=set(FASTMATH))
 def add_correction(u, du, kind):
     """u + du for fluid particles (walls keep their prescribed velocity)."""
     out = np.empty_like(u)

@@ -8,11 +8,12 @@ from typing import Literal
 from numba import njit
 from pydantic import Field
 
+from sphfoam.engine.fastmath import FASTMATH
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
-_JIT = dict(cache=True, fastmath=True, inline="always")
+_JIT = dict(cache=True, fastmath=set(FASTMATH), inline="always")
 
 
 @njit(**_JIT)
@@ -99,8 +100,8 @@ class Tait(PipelineModel):
         if g.is_integer() and int(g) % 2 == 1 and 3 <= g <= 15:
             half = (int(g) - 1) // 2
             code = ("eos_r = rho[a] / eos_rho0\n" + _power_code("eos_r", half, "eos_rh")
-                    + f"p[a] = eos_B * (eos_rh * eos_rh * eos_r - 1.0)\n"
-                    f"c[a] = eos_c0 * eos_rh")
+                    + "p[a] = eos_B * (eos_rh * eos_rh * eos_r - 1.0)\n"
+                    "c[a] = eos_c0 * eos_rh")
         else:
             code = ("p[a] = eos_pressure(rho[a], eos_rho0, eos_B, eos_gamma)\n"
                     "c[a] = eos_sound_speed(rho[a], eos_rho0, eos_c0, eos_gamma)")

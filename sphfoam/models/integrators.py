@@ -7,9 +7,12 @@ import numpy as np
 from numba import njit, prange
 from pydantic import Field
 
+from sphfoam.engine.fastmath import FASTMATH
 from sphfoam.registry import Coeffs, Model, register
 
-_JIT = dict(cache=True, fastmath=True, parallel=True)
+#: fast math without reassociation: the cached code computes what freshly compiled code does
+#: (sphfoam.engine.fastmath)
+_JIT = dict(cache=True, fastmath=set(FASTMATH), parallel=True)
 
 
 @njit(**_JIT)

@@ -11,11 +11,12 @@ import math
 from numba import njit
 from pydantic import Field
 
+from sphfoam.engine.fastmath import FASTMATH
 from sphfoam.engine.terms import LOOP_STAGES, Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
-_JIT = dict(cache=True, fastmath=True, inline="always")
+_JIT = dict(cache=True, fastmath=set(FASTMATH), inline="always")
 
 
 # --- cubic spline, Monaghan & Lattanzio (1985), T(3.5), alpha_2 = 15 / (7 pi) -------------

@@ -52,6 +52,13 @@ class MetricCoeffs(Coeffs):
     function: str = Field(description="name of the function object in system/controlDict "
                           "whose output is read")
 
+    @field_validator("function", check_fields=False)
+    @classmethod
+    def _plain(cls, v):
+        from sphfoam.case.paths import check_name
+
+        return check_name(v)
+
 
 class Metric(Model, abc.ABC):
     """Base of the metrics: ``evaluate(case_path)`` -> :class:`MetricValue`.

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
+from sphfoam.engine.fastmath import FASTMATH
 
-_JIT = dict(cache=True, fastmath=True)
+_JIT = dict(cache=True, fastmath=set(FASTMATH))
 
 
 @njit(**_JIT, inline="always")

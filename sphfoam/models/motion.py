@@ -97,7 +97,8 @@ class DisplacementTable(Motion):
     class Coeffs(Coeffs):
         table: list[tuple[float, Vector2]] | None = Field(None, description="( (t (dx dy)) ... )")
         file: str | None = Field(None, description="file with columns t dx dy, relative to "
-                                 "the case")
+                                 "the case (and inside it), or an absolute path to use a "
+                                 "file elsewhere on purpose")
         interpolation: Literal["linear", "spline"] = "linear"
 
         @model_validator(mode="after")
@@ -120,6 +121,8 @@ class DisplacementTable(Motion):
     def _set(self, data: np.ndarray, where: str):
         if data.ndim != 2 or data.shape[1] != 3 or data.shape[0] < 2:
             raise ValueError(f"{where}: needs at least two rows of t dx dy")
+        if not np.isfinite(data).all():
+            raise ValueError(f"{where}: holds a non-finite number (inf or nan)")
         if np.any(np.diff(data[:, 0]) <= 0):
             raise ValueError(f"{where}: times must increase strictly")
         self._data = data
@@ -131,10 +134,11 @@ class DisplacementTable(Motion):
     def resolve(self, case_path: Path) -> None:
         if self.coeffs.file is None:
             return
+        from sphfoam.case.paths import resolve_file
+
         # $FOAM_CASE / $FOAM_CASENAME / <case> expand as in OpenFOAM file names
-        f = Path(case_path) / foamdict.expand(str(self.coeffs.file), case_path)
-        if not f.is_file():
-            raise FileNotFoundError(f"{self.coeffs.file}: no such file in the case")
+        f = resolve_file(case_path, foamdict.expand(str(self.coeffs.file), case_path),
+                         absolute=True)
         self._set(np.loadtxt(f, ndmin=2, comments=("#", "//")), self.coeffs.file)
 
     def _clamp(self, t):

@@ -54,7 +54,14 @@ def main(argv=None):
     ap.add_argument("--left", type=float, default=-150.0, help="x of the tank's left wall")
     ap.add_argument("--out", type=Path, default=HERE / "runUp")
     a = ap.parse_args(argv)
-    a.out.mkdir(exist_ok=True)
+    out = a.out.resolve()
+    if (out == HERE or HERE in out.parents) and out.relative_to(HERE).parts[:1] != ("runUp",):
+        ap.error(f"--out {a.out}: inside the case {HERE} (other than its runUp/ folder) the "
+                 "clones would copy themselves; choose a folder outside the case")
+    try:
+        a.out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        ap.error(f"--out {a.out}: {e.strerror}")
     rows = []
     for r in a.amplitudes:
         print(f"A/H = {r:g} ...", flush=True)

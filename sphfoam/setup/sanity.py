@@ -1,0 +1,151 @@
+"""Geometry sanity of system/particleDict, checked before any particle is allocated.
+
+* every fluid region holds at least one particle row (its extent is at least dx, a polygon
+  has an area);
+* a fluid region lies inside the tank (a box wall entry) it is in, on every closed side;
+* the fluid lies inside ``domain`` when one is given (particles outside it would be removed
+  at the first step);
+* a particle budget: the particle count the spacing gives (fluid area / dx^2 plus wall rows)
+  and the cells of the neighbour grid over the domain, with an estimate of the memory they
+  need, against the memory of this machine (``dx 1e-7`` is refused here, not by the kernel's
+  out-of-memory killer).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from sphfoam.case.errors import Problem
+from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
+
+#: memory per particle (bytes) the estimate uses: the state (~20 float64 fields), the
+#: integrator's copies, the generated pipeline's per-particle scratch and the neighbour
+#: lists' share, rounded up
+BYTES_PER_PARTICLE = 2048
+#: memory per cell of the neighbour grid (bytes): head and count arrays
+BYTES_PER_CELL = 16
+#: the fraction of this machine's memory a case may plan to use
+MEMORY_FRACTION = 0.8
+
+
+def _bbox(region):
+    if isinstance(region, BoxRegion):
+        return np.asarray(region.min, float), np.asarray(region.max, float)
+    pts = np.asarray(region.points, float)
+    return pts.min(axis=0), pts.max(axis=0)
+
+
+def _area(region) -> float:
+    if isinstance(region, BoxRegion):
+        (x0, y0), (x1, y1) = region.min, region.max
+        return (x1 - x0) * (y1 - y0)
+    p = np.asarray(region.points, float)
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+
+
+def _wall_length(w) -> float:
+    from sphfoam.setup.geometry import polylines_of
+
+    total = 0.0
+    for pts, _side in polylines_of(w):
+        p = np.asarray(pts, float)
+        total += float(np.hypot(*np.diff(p, axis=0).T).sum())
+    return total
+
+
+def machine_memory() -> int | None:
+    """Physical memory of this machine in bytes (None where the OS does not say)."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _size(nbytes: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if nbytes < 1024 or unit == "PiB":
+            return f"{nbytes:.3g} {unit}"
+        nbytes /= 1024
+    return f"{nbytes:.3g} PiB"
+
+
+def estimate(pd: ParticleDict, support: float = 2.0, hdx: float = 1.3) -> tuple[float, float]:
+    """(particles, cells) the particleDict gives: fluid area / dx^2 + wall length x layers
+    / dx, and the neighbour-grid cells of side ``support * hdx * dx`` over the domain."""
+    from sphfoam.setup.particles import default_domain
+
+    dx = pd.dx
+    n = sum(_area(r) for r in pd.fluid.values()) / dx / dx
+    n += sum(_wall_length(w) * w.layers / dx for w in pd.walls.values())
+    lo, hi = default_domain(pd)
+    cell = support * hdx * dx
+    cells = (max(hi[0] - lo[0], cell) / cell + 1) * (max(hi[1] - lo[1], cell) / cell + 1)
+    return n, cells
+
+
+def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", support: float = 2.0,
+                      hdx: float = 1.3, memory: int | None = None) -> list[Problem]:
+    """What is wrong with the geometry of ``pd`` (empty when it makes sense)."""
+    problems: list[Problem] = []
+    dx = pd.dx
+    for name, r in pd.fluid.items():
+        lo, hi = _bbox(r)
+        ext = float(min(hi - lo))
+        if ext < dx * (1 - 1e-9):
+            problems.append(Problem(file, f"fluid.{name}", f"is {ext:g} m across, less than "
+                                    f"dx = {dx:g} m: it holds no row of particles"))
+        elif not isinstance(r, BoxRegion) and _area(r) < dx * dx:
+            problems.append(Problem(file, f"fluid.{name}.points", "the polygon encloses "
+                                    "(almost) no area: it holds no particle"))
+    tanks = {n: w for n, w in pd.walls.items() if isinstance(w, BoxWalls)}
+    tol = 1e-9 * max(1.0, dx)
+    for name, r in pd.fluid.items():
+        lo, hi = _bbox(r)
+        if tanks:
+            out = []
+            for wname, w in tanks.items():
+                sides = []
+                if "left" not in w.open and lo[0] < w.min[0] - tol:
+                    sides.append(f"left of x = {w.min[0]:g}")
+                if "right" not in w.open and hi[0] > w.max[0] + tol:
+                    sides.append(f"right of x = {w.max[0]:g}")
+                if "bottom" not in w.open and lo[1] < w.min[1] - tol:
+                    sides.append(f"below y = {w.min[1]:g}")
+                if "top" not in w.open and hi[1] > w.max[1] + tol:
+                    sides.append(f"above y = {w.max[1]:g}")
+                overlaps = (lo[0] < w.max[0] and hi[0] > w.min[0] and lo[1] < w.max[1]
+                            and hi[1] > w.min[1])
+                if not sides and overlaps:
+                    out = []
+                    break
+                out.append(f"walls.{wname} ({', '.join(sides) if sides else 'no overlap'})")
+            if out:
+                problems.append(Problem(file, f"fluid.{name}", "lies (partly) outside the "
+                                        "tank: " + "; ".join(out)
+                                        + ". Its particles would start inside or behind the "
+                                        "wall rows, or outside the tank"))
+        if pd.domain is not None:
+            dlo, dhi = pd.domain.min, pd.domain.max
+            if lo[0] < dlo[0] or lo[1] < dlo[1] or hi[0] > dhi[0] or hi[1] > dhi[1]:
+                problems.append(Problem(file, f"fluid.{name}", f"reaches outside domain "
+                                        f"{tuple(dlo)}..{tuple(dhi)}: its particles there "
+                                        "would be removed at the first step"))
+    if problems:
+        return problems
+    try:
+        n, cells = estimate(pd, support, hdx)
+        need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
+    except (ZeroDivisionError, OverflowError):
+        n = cells = need = math.inf
+    memory = machine_memory() if memory is None else memory
+    if not math.isfinite(need) or (memory is not None and need > MEMORY_FRACTION * memory):
+        have = f"this machine has {_size(memory)}" if memory else "more than is available"
+        problems.append(Problem(file, "dx", f"dx = {dx:g} m gives about {n:.3g} particles and "
+                                f"{cells:.3g} neighbour-grid cells, needing about "
+                                f"{_size(need)} of memory; {have}. Use a larger dx (or a "
+                                "smaller domain)"))
+    return problems
