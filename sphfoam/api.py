@@ -22,7 +22,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from sphfoam.case.case import Case
-    from sphfoam.runner import RunReport
+    from sphfoam.timeloop import RunReport
 
 __all__ = ["clone_case", "run", "setup_case", "times", "read_time", "export_vtk"]
 
@@ -50,10 +50,10 @@ def setup_case(case: "Case | str | Path") -> "Case":
     """``sphfoam setup --force``: particles from ``system/particleDict`` into ``0/`` (and
     the one-cell mesh and ``CASE.foam`` for ParaView). (``sphfoam.setup`` is the
     package of the set-up code, hence the longer name.)"""
-    from sphfoam import runner
+    from sphfoam.setup.initial import setup_case as _setup_case
 
     c = _case(case)
-    runner.setup_case(c, log=lambda msg: None)
+    _setup_case(c, log=lambda msg: None)
     return c
 
 
@@ -65,7 +65,7 @@ def run(case: "Case | str | Path", *, end_time: float | None = None, progress: b
     log lines, which always go to ``log.sphfoam``. Returns the run's report (steps,
     particles, timings, written times, and ``failure`` if the blow-up detector stopped it).
     """
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     return run_case(_case(case), progress=progress, echo=echo, end_time=end_time)
 

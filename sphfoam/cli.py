@@ -72,7 +72,7 @@ def _handle(e: BaseException, command: str):
     if isinstance(e, CaseError):
         _fail("case error", "\n".join(f"• {p}" for p in e.problems))
     if isinstance(e, KeyboardInterrupt):
-        from sphfoam.runner import Interrupted
+        from sphfoam.timeloop import Interrupted
 
         if isinstance(e, Interrupted) and e.written:
             err_console.print("[yellow]interrupted: the current state was written to "
@@ -171,7 +171,7 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
         no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar")):
     """Run CASE from its start time (setting up particles first if 0/ has none)."""
     from sphfoam.engine.health import BlowUp
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     _threads(threads)
     c = _case(case)
@@ -223,7 +223,7 @@ def setup(case: Path = typer.Argument(Path("."), help="case directory"),
     Also writes the one-cell constant/polyMesh and CASE.foam that ParaView's OpenFOAM reader opens.
     """
     from sphfoam.io.fields import has_particles
-    from sphfoam.runner import setup_case
+    from sphfoam.setup.initial import setup_case
 
     c = _case(case)
     if has_particles(c.path / "0") and not force:
@@ -235,9 +235,11 @@ def setup(case: Path = typer.Argument(Path("."), help="case directory"),
 @_guarded
 def check(case: Path = typer.Argument(Path("."), help="case directory, or a study "
                                       "dictionary")):
-    """Validate every dictionary of CASE without running it (system/, constant/,
-    system/metricsDict and the study dictionaries beside them); or one study dictionary."""
-    from sphfoam.case.check import check_case
+    """Validate every dictionary of CASE (or one study dictionary) without running it.
+
+    system/, constant/, system/metricsDict and the study dictionaries beside them, each study's runs included.
+    """
+    from sphfoam.check import check_case
 
     if case.is_file():
         from sphfoam import study as st

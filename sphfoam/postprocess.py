@@ -160,7 +160,7 @@ def _pyplot():
 def _series(case: Case, name: str, filename: str | None = None):
     """(columns, rows sorted by time, latest start folder) of a function object's output,
     all restarts joined; None when it wrote nothing."""
-    from sphfoam.models.metrics import read_table, start_folders
+    from sphfoam.io.tables import read_table, start_folders
 
     folders = start_folders(case.path, name)
     cols, parts = None, []
@@ -239,7 +239,7 @@ def plot_probes(case: Case, name: str, fo, wave, theory: str) -> Path | None:
 def plot_lines(case: Case, name: str, fo, wave, theory: str, n_times: int = 6) -> Path | None:
     """Ux(y) along each line at up to ``n_times`` sampled times; a line that follows the
     crest is drawn against the theory's u(z) under the crest."""
-    from sphfoam.models.metrics import read_table, start_folders
+    from sphfoam.io.tables import read_table, start_folders
 
     files = []
     for _, folder in start_folders(case.path, name):
@@ -330,7 +330,7 @@ def plot_crest(case: Case, name: str, fo, wave, theory: str) -> Path | None:
     ax[2].plot(t, c, "b-", lw=1)
     fit = folder / "celerity.dat"
     if fit.is_file():
-        from sphfoam.models.metrics import read_table
+        from sphfoam.io.tables import read_table
 
         fc, fd = read_table(fit)
         if fd.size and np.isfinite(fd[0, 0]):

@@ -277,6 +277,7 @@ def prepare(study: Study, rerun: bool = False) -> list[RunSpec]:
     (all problems on one screen before anything runs). Returns the runs still to do."""
     from sphfoam.case.case import Case
     from sphfoam.case.edit import clone_case
+    from sphfoam.setup.sanity import check_geometry
 
     study.root.mkdir(parents=True, exist_ok=True)
     todo, problems = [], []
@@ -291,7 +292,9 @@ def prepare(study: Study, rerun: bool = False) -> list[RunSpec]:
             continue
         clone_case(study.base, path, study.edits[run.name], ignore=_inside(study))
         try:
-            Case(path).validate()
+            c = Case(path)
+            c.validate()
+            check_geometry(c)
         except CaseError as e:
             problems.extend(Problem(f"{run.name}/{p.file}", p.key, p.message)
                             for p in e.problems)
@@ -318,7 +321,8 @@ def run_one(spec: RunSpec) -> dict:
     from sphfoam.case.case import Case
     from sphfoam.engine.health import BlowUp
     from sphfoam.case.metrics_dict import evaluate_metrics
-    from sphfoam.runner import run_case, setup_case
+    from sphfoam.setup.initial import setup_case
+    from sphfoam.timeloop import run_case
 
     path = Path(spec.path)
     row: dict[str, Any] = {"run": spec.name, "variant": spec.variant,

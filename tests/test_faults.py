@@ -29,7 +29,7 @@ import pytest
 from typer.testing import CliRunner
 
 from sphfoam.case.case import Case
-from sphfoam.case.check import check_case
+from sphfoam.check import check_case
 from sphfoam.case.errors import CaseError
 from sphfoam.case.times import list_times
 from sphfoam.cli import app
@@ -426,7 +426,7 @@ def test_ctrl_c_twice_tells_the_truth(tutorial):
 def test_second_ctrl_c_is_reported_as_not_written(tutorial, monkeypatch, where):
     """The second Ctrl-C (simulated): mid-step, or while the state is being written. The run
     ends with Interrupted(written=None) and leaves no new time directory behind."""
-    import sphfoam.runner as runner
+    import sphfoam.timeloop as runner
 
     case = tutorial("damBreak", {"system/particleDict:dx": 0.0125,
                                  "system/controlDict:writeInterval": 10.0,

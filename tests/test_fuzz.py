@@ -5,7 +5,7 @@ dictionaries) is mutated a few hundred times in all: a value replaced by inf, na
 negative or zero number, a huge one, a wrong type (a word, a list, a sub-dictionary, a
 switch), rich markup, a path that escapes the case; a key deleted or misspelt; and, on the
 text, a brace or a semicolon removed, a latin-1 byte inserted, the file cut short. Each
-mutated case goes through :func:`sphfoam.case.check.check_case` in-process. The outcome must
+mutated case goes through :func:`sphfoam.check.check_case` in-process. The outcome must
 be a valid case or a clean CaseError whose every problem names its file (and its key, unless
 the file as a whole is unreadable); never another exception.
 """
@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from sphfoam.case import foamdict
-from sphfoam.case.check import check_case, study_dicts
+from sphfoam.check import check_case, study_dicts
 from sphfoam.case.errors import CaseError
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"

@@ -222,13 +222,6 @@ class Case:
                 problems.extend(p for p in e.problems if str(p) not in map(str, problems))
         if problems:
             raise CaseError(problems)
-        from sphfoam.setup.sanity import geometry_problems
-
-        kernel = self.models.sph["kernel"]
-        problems = geometry_problems(self.particles, FILES["particleDict"][0],
-                                     kernel.support, kernel.coeffs.hdx)
-        if problems:
-            raise CaseError(problems)
         if not math.isfinite(self.context.c0) or self.context.c0 <= 0:
             raise CaseError.single(SPH_PROPERTIES, "equationOfState",
                                    "speed of sound is not positive; set vmax or speedOfSound")

@@ -22,12 +22,18 @@ import shutil
 import socket
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError
-from sphfoam.io.fields import CLOUD_DIR, read_state, write_state
+from sphfoam.case.times import list_times, time_name
+from sphfoam.io.fields import CLOUD_DIR, has_particles, read_state, write_state
+
+if TYPE_CHECKING:
+    from sphfoam.case.case import Case
+    from sphfoam.engine.state import ParticleState
 
 __all__ = ["write_time_dir", "check_time_dir", "recover", "case_lock", "CaseLocked", "REQUIRED_FIELDS",
            "LOCK_FILE"]
@@ -253,3 +259,56 @@ def recover(case_path: Path, log=None) -> None:
                     if log:
                         log(f"removed {name}: the remains of an interrupted write")
                 break
+
+
+# --- a case's time directories ------------------------------------------------------------
+def write_time(case: Case, state: ParticleState, t: float, index: int, dt: float, p=None,
+               name: str | None = None) -> Path:
+    """Write a time directory atomically (sphfoam.io.timedirs): complete or not at all."""
+    c = case.control
+    return write_time_dir(case.path, name or time_name(t, c.timePrecision), state.to_fields(p),
+                          {"value": float(t), "index": int(index), "deltaT": float(dt)},
+                          fmt=c.writeFormat, precision=c.writePrecision)
+
+
+def read_time_value(folder: Path) -> tuple[float, int]:
+    f = folder / "uniform" / "time"
+    if f.is_file():
+        d = read_time_dict(folder)
+        return float(d["value"]), int(d.get("index", 0))
+    return float(folder.name), 0
+
+
+def start_folder(case: Case, log=None) -> Path | None:
+    """The time directory to start from: the latest (startFrom latestTime) or startTime's,
+    complete (sphfoam.io.timedirs.check_time_dir). Incomplete directories are skipped, each
+    with a log line saying why; None when no directory has particles at all."""
+    times = [(t, p) for t, p in list_times(case.path) if has_particles(p)]
+    if not times:
+        return None
+    skipped = []
+    if case.control.startFrom == "latestTime":
+        for t, p in reversed(times):
+            why, _ = check_time_dir(p)
+            if why is None:
+                break
+            skipped.append((p, why))
+            if log:
+                log(f"skipping time directory {p.name}: {why}")
+        else:
+            raise CaseError.single(
+                "system/controlDict", "startFrom", "no complete time directory to start from: "
+                + "; ".join(f"{p.name}: {why}" for p, why in skipped)
+                + " (run 'sphfoam setup --force' to start again from 0)")
+        return p
+    want = case.control.startTime
+    for t, p in times:
+        if abs(t - want) <= 1e-9 * max(1.0, abs(want)):
+            why, _ = check_time_dir(p)
+            if why is not None:
+                raise CaseError.single("system/controlDict", "startTime",
+                                       f"time directory {p.name} is incomplete: {why}")
+            return p
+    raise CaseError.single("system/controlDict", "startTime",
+                           f"no time directory with particles at {want:g}; have: "
+                           + ", ".join(p.name for _, p in times))

@@ -149,3 +149,18 @@ def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", suppo
                                 f"{_size(need)} of memory; {have}. Use a larger dx (or a "
                                 "smaller domain)"))
     return problems
+
+
+def check_geometry(case) -> None:
+    """The geometry of a validated case's system/particleDict (fluid inside the walls, a
+    non-empty domain, dx against the domain and the particle and memory budget); one
+    CaseError listing every problem. Run by ``sphfoam check``, by set-up before anything
+    is allocated, and for every run of a study."""
+    from sphfoam.case.case import FILES
+    from sphfoam.case.errors import CaseError
+
+    kernel = case.models.sph["kernel"]
+    problems = geometry_problems(case.particles, FILES["particleDict"][0], kernel.support,
+                                 kernel.coeffs.hdx)
+    if problems:
+        raise CaseError(problems)

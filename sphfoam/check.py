@@ -15,6 +15,7 @@ from pathlib import Path
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError, Problem
+from sphfoam.setup.sanity import check_geometry
 
 __all__ = ["check_case", "study_dicts", "CheckReport"]
 
@@ -56,7 +57,7 @@ def check_case(path: Path | str, study_runs: bool = True) -> CheckReport:
     """Validate every dictionary of the case at ``path`` (CaseError with all problems).
     ``study_runs``: also clone and validate every run of each study dictionary
     (:func:`validate_runs`)."""
-    from sphfoam.models.metrics import METRICS_DICT, load_metrics
+    from sphfoam.case.metrics_dict import METRICS_DICT, load_metrics
     from sphfoam import study as st
 
     case = Case(path)
@@ -67,6 +68,7 @@ def check_case(path: Path | str, study_runs: bool = True) -> CheckReport:
     report = CheckReport(case)
     try:
         case.validate()
+        check_geometry(case)
     except CaseError as e:
         problems.extend(e.problems)
     if (case.path / METRICS_DICT).is_file():
@@ -112,7 +114,7 @@ def validate_runs(study) -> None:
 
     from sphfoam import study as st
     from sphfoam.case.edit import clone_case
-    from sphfoam.models.metrics import load_metrics
+    from sphfoam.case.metrics_dict import load_metrics
 
     problems: list[Problem] = []
     with tempfile.TemporaryDirectory(prefix="sphfoam-check-") as tmp:
@@ -123,6 +125,7 @@ def validate_runs(study) -> None:
                                   ignore=st._inside(study))
                 c = Case(path)
                 c.validate()
+                check_geometry(c)
                 _check_metrics(load_metrics(path, run.metrics, source=run.source), c)
             except CaseError as e:
                 problems.extend(Problem(f"{where}: {p.file}", p.key, p.message)

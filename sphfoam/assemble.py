@@ -1,0 +1,63 @@
+"""A case's models assembled into a :class:`~sphfoam.engine.simulation.Simulation`: the
+selection, its compiled pipeline, the wall segments and motions, the time-step controls."""
+
+from __future__ import annotations
+
+from sphfoam.case.case import SPH_PROPERTIES, Case
+from sphfoam.case.errors import CaseError
+from sphfoam.case.schemas import SPH_FAMILIES
+from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.simulation import Simulation
+from sphfoam.engine.state import WALL, ParticleState
+from sphfoam.setup.geometry import segments_of
+from sphfoam.setup.particles import default_domain
+
+
+def selection(case: Case) -> Selection:
+    """The models of the case in pipeline order, with its time-step and periodicity
+    switches."""
+    domain = case.particles.domain
+    periodic = domain.periodic if domain is not None else []
+    return Selection(**{f: case.models.sph[f] for f in SPH_FAMILIES},
+                     adjust_time_step=case.control.adjustTimeStep,
+                     periodic_x="x" in periodic, periodic_y="y" in periodic)
+
+
+def build_simulation(case: Case, state: ParticleState) -> Simulation:
+    ctx = case.context
+    sel = selection(case)
+    lo, hi = default_domain(case.particles)
+    check_wall_fields(case, state)
+    pipe = build_pipeline(sel, ctx, domain_lo=lo, domain_hi=hi)
+    c = case.control
+    return Simulation(state, pipe, case.models.integrator,
+                      segments=segments_of(case.particles), motions=case.models.motions,
+                      domain_lo=lo, domain_hi=hi, beta=c.maxCo,
+                      force_condition=case.schemes.timeStepControl.forceCondition,
+                      adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
+                      max_delta_t=c.maxDeltaT,
+                      cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
+                      dt_limit=min(m.dt_limit(ctx) for m in sel.models()))
+
+
+def check_wall_fields(case: Case, state: ParticleState) -> None:
+    """The particles must have been set up for the selected boundary (and motions)."""
+    bnd = case.models.sph["boundary"]
+    pd = case.particles
+    problem = None
+    walls = state.kind == WALL
+    missing = [k for k in bnd.wall_fields if k not in state.extra] if walls.any() else []
+    if case.models.motions:
+        missing += [k for k in ("patch", "x0", "y0") if k not in state.extra]
+    if missing:
+        problem = f"the particles lack the field(s) {', '.join(missing)}"
+    elif bnd.wall_placement == "none" and walls.any():
+        problem = f"the particles include wall particles, which {bnd.name} does not use"
+    elif walls.any() and "wallDist" in state.extra:
+        d = state.extra["wallDist"][walls]
+        if bnd.wall_layers == 1 and d.max() > 0.75 * pd.dx:
+            problem = "there is more than one row of wall particles"
+    if problem:
+        raise CaseError.single(SPH_PROPERTIES, "boundary.type",
+                               f"{problem}: they were set up for another boundary; run "
+                               f"'sphfoam setup --force' again for {bnd.name}")
