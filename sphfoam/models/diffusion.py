@@ -49,8 +49,9 @@ class AntuonoDeltaSPH(DensityFilter):
     renormalised gradient is exactly g (wherever L_a exists, a truncated support included), so
     psi_ab . r_ba = 0 and, grad_a W_ab being parallel to r_ab, every pair term vanishes. The
     pre-pass (term ``renormalisedDensityGradient``) stores <grad rho>^L in ``aux`` for every
-    particle; the sums run over the neighbours the diffusion itself sees (fluid, ghosts, wet
-    walls). Guard: where det M / (M_xx M_yy) (Hadamard's ratio, 1 for a full symmetric
+    particle; its sums run over every neighbour (as XSPH's, with which it shares the pre-pass
+    loop; a dry wall particle enters with its own density), the diffusion's over fluid,
+    ghosts and wet walls. Guard: where det M / (M_xx M_yy) (Hadamard's ratio, 1 for a full symmetric
     support) is below ``minDetRatio`` (an isolated or nearly isolated particle) the gradient is
     set to zero, i.e. that particle's pairs fall back to the Molteni & Colagrossi term. No
     eta^2 guard on |r|^2 (it would spoil the exactness; the pair loop has r2 > 0 and the ratio
@@ -111,7 +112,7 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
 
     def terms(self):
         return [Term("renormalisedDensityGradient", ("prepass",), init=self._INIT,
-                     pair=self._PAIR, final=self._FINAL, applies=("all",),
+                     pair=self._PAIR, final=self._FINAL, applies=("all",), sees=("all",),
                      reads=("gradW",), writes=self._G),
                 Term("densityDiffusion", ("rates", "density"), pair=self._DIFFUSION,
                      reads=("gradW", *self._G), writes=("drho",))]
