@@ -198,3 +198,52 @@ def test_shifting_moves_positions_only_and_conserves_momentum(lind):
     for _ in range(20):
         sim.step()
     assert np.abs(mom(sim.state) - p0).max() < 1e-12 * scale
+
+
+def test_tank_runs_with_shifting_beside_xsph_and_renormalised_diffusion(tutorial):
+    """The hydrostaticTank case selecting the new words in constant/sphProperties (the case
+    layer, the runner and the log): 0.1 s at H/dx = 8 stays at rest and in the tank."""
+    import math
+
+    from sphfoam.case.times import list_times
+    from sphfoam.io.fields import read_state
+    from sphfoam.runner import run_case
+
+    case = tutorial("hydrostaticTank", {
+        "constant/sphProperties:densityFilter": {"type": "antuonoDeltaSPH"},
+        "constant/sphProperties:velocityCorrection": {"type": "xsph"},
+        "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting"},
+        "system/particleDict:dx": 0.05, "system/controlDict:endTime": 0.1,
+        "system/controlDict:writeInterval": 0.1})
+    rep = run_case(case, progress=False, echo=None)
+    assert rep.removed == 0
+    log = (case / "log.sphfoam").read_text()
+    assert "particleShifting=deltaPlusShifting" in log and "velocityCorrection=xsph" in log
+    s = read_state(list_times(case)[-1][1])
+    f = s["type"] == 0
+    assert np.all(np.isfinite(s["positions"]))
+    x, y = s["positions"][f].T
+    assert x.min() > 0 and x.max() < 0.5 and y.min() > 0
+    assert np.sqrt((s["U"][f] ** 2).sum(axis=1)).max() < 0.05 * math.sqrt(9.81 * 0.4)
+
+
+def test_contract_extensions_step_terms_for_fluid_and_composed_advection(dplus, lind):
+    """The two generic extensions the shifting needs: a ``step`` term applying to ``fluid``
+    runs for fluid particles (before, the step pass ran for walls only and such a term was
+    silently dropped); several ``advection_velocity`` hooks compose in selection order."""
+    src = lind.pipe.source_path.read_text()
+    step = src[src.index("def step_pass"):]
+    assert "if kind[a] == FLUID:" in step.split("\ndef ")[0] and "shift_mxx" in step
+    # without a fluid step term the step pass keeps its wall-only form (hybrid's)
+    models = {f: registry.build(f, s) for f, s in SPECS.items()}
+    models["boundary"] = registry.build("boundary", {"type": "hybrid"})
+    names = ["h", "inv_h", "support2", "eta2", "gx", "gy"]
+    for mdl in Selection(**models).models():
+        names += list(mdl.params(CTX))
+    from sphfoam.engine.codegen import generate_source
+    hyb = generate_source(Selection(**models), names)
+    hstep = hyb[hyb.index("def step_pass"):].split("\ndef ")[0]
+    assert "if kind[a] != FLUID:" in hstep and "kind[a] == FLUID" not in hstep
+    # composition: XSPH's hook first, then the shifting's
+    hooks = lind.sel.hooks("advection_velocity")
+    assert [h.__self__.family for h in hooks] == ["velocityCorrection", "particleShifting"]
