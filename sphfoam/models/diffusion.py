@@ -3,7 +3,7 @@ Molteni & Colagrossi (2009) (``deltaSPH`` in ``sphfoam.models.filters``), select
 ``densityFilter`` family:
 
 * ``antuonoDeltaSPH``: the renormalised form of Antuono, Colagrossi, Marrone & Molteni
-  (2010, CPC 181, eqs. (4)-(6)) and Antuono et al. (2012, CPC 183): the pair term is corrected
+  (2010, CPC 181) and Antuono et al. (2012, CPC 183): the pair term is corrected
   by the renormalised density gradients of a and b, so it vanishes for every linear density
   field, at a free surface too (where the plain term diffuses the hydrostatic gradient);
 * ``fourtakasDeltaSPH``: the hydrostatically consistent diffusion of Fourtakas, Dominguez,
@@ -38,7 +38,7 @@ class _Delta(Coeffs):
 
 @register
 class AntuonoDeltaSPH(DensityFilter):
-    """delta-SPH with the renormalised density gradient, Antuono et al. (2010) eqs. (4)-(6):
+    """delta-SPH with the renormalised density gradient, Antuono et al. (2010):
 
         drho_a/dt += delta h c0 sum_b psi_ab . grad_a W_ab V_b,
         psi_ab = 2 (rho_b - rho_a) r_ba / |r_ba|^2 - (<grad rho>^L_a + <grad rho>^L_b),
@@ -59,7 +59,7 @@ class AntuonoDeltaSPH(DensityFilter):
     """
 
     name = "antuonoDeltaSPH"
-    doc = ("renormalised delta-SPH, Antuono et al. (2010) eqs. (4)-(6): psi_ab = "
+    doc = ("renormalised delta-SPH, Antuono et al. (2010): psi_ab = "
            "2(rho_b-rho_a) r_ba/r^2 - (<grad rho>^L_a + <grad rho>^L_b), exact for linear rho")
     _G = ("aux.rgrad_x", "aux.rgrad_y")
 

@@ -10,16 +10,16 @@ Both models share
 
 * a free-surface detection (``step`` stage, once per step): the smallest eigenvalue lambda_a of
   M_a = sum_b grad_a W_ab (x) r_ba V_b (1 for a full support, about 0.5 on a flat free surface,
-  0 for an isolated particle), Marrone, Colagrossi, Le Touze & Graziani (2010, JCP 229, §2),
-  and the surface normal n_a = -L_a sum_b grad_a W_ab V_b / |...|, L_a = M_a^-1 (their eq.
-  (13), the renormalised gradient of the colour function);
+  0 for an isolated particle), Marrone, Colagrossi, Le Touze & Graziani (2010, JCP 229),
+  and the surface normal n_a = -L_a sum_b grad_a W_ab V_b / |...|, L_a = M_a^-1 (their
+  renormalised gradient of the colour function);
 * the concentration gradient (``prepass`` stage, every evaluation; over every neighbour,
   walls included, so that a wall's particles fill the support), with the anti-clumping
   term of Monaghan (2000) as Lind et al. (2012) and Sun et al. (2017) write it,
   grad C_a = sum_b (1 + R (W_ab / W(dx))^n) grad_a W_ab V_b, R = 0.2, n = 4;
 * the surface rule: a fluid particle with lambda_a < ``surfaceLambda`` (0.75, Marrone et al.'s
   bound of the interior) or with such a fluid neighbour is near the surface and keeps only the
-  tangential part of its shift, delta_u - (delta_u . n_a) n_a (Lind et al. 2012, §3.3), so the
+  tangential part of its shift, delta_u - (delta_u . n_a) n_a (as Lind et al. 2012 do), so the
   surface is not smeared outwards. Wall particles are never shifted.
 
 The shift moves positions only: the momentum and continuity equations use v, so linear momentum
@@ -153,7 +153,7 @@ else:
 
 @register
 class LindShifting(ParticleShifting):
-    """Fickian shifting of Lind, Xu, Stansby & Rogers (2012, JCP 231), eqs. (8)-(10):
+    """Fickian shifting of Lind, Xu, Stansby & Rogers (2012, JCP 231):
     delta_r_a = -D grad C_a with D = A h |v_a| dt, i.e. the shifting velocity
     delta_u_a = delta_r_a / dt = -A h |v_a| grad C_a (independent of the step), A = 2 (their
     range 1 to 6); grad C with Monaghan's anti-clumping term and the surface rule of the module
@@ -161,7 +161,7 @@ class LindShifting(ParticleShifting):
     """
 
     name = "lindShifting"
-    doc = ("Lind et al. (2012) eqs. (8)-(10): delta_u = -A h |v| grad C, grad C = sum_b "
+    doc = ("Lind et al. (2012): delta_r = -A h |v| dt grad C, i.e. delta_u = -A h |v| grad C, grad C = sum_b "
            "(1 + R(W_ab/W(dx))^n) grad W_ab V_b; tangential only near the free surface")
 
     class Coeffs(_ShiftCoeffs):
@@ -176,7 +176,7 @@ class LindShifting(ParticleShifting):
 
 @register
 class DeltaPlusShifting(ParticleShifting):
-    """delta+-SPH shifting of Sun, Colagrossi, Marrone & Zhang (2017, CMAME 315), eq. (21):
+    """delta+-SPH shifting of Sun, Colagrossi, Marrone & Zhang (2017, CMAME 315):
     delta_r_a = -CFL Ma (2h)^2 sum_b (1 + R (W_ab/W(dx))^n) grad_a W_ab V_b, written as a
     velocity with the acoustic time step of the same CFL number, dt = CFL h / c0:
     delta_u_a = -4 Ma c0 h grad C_a (the CFL cancels), Ma = U_max / c0 (0.1 for the usual
@@ -185,7 +185,7 @@ class DeltaPlusShifting(ParticleShifting):
     """
 
     name = "deltaPlusShifting"
-    doc = ("delta+-SPH shifting, Sun et al. (2017) eq. (21): delta_r = -CFL Ma (2h)^2 grad C, "
+    doc = ("delta+-SPH shifting, Sun et al. (2017): delta_r = -CFL Ma (2h)^2 grad C, "
            "as delta_u = -4 Ma c0 h grad C; tangential only near the free surface")
 
     class Coeffs(_ShiftCoeffs):
