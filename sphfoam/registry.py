@@ -29,6 +29,8 @@ FAMILIES: dict[str, str] = {
     "densityFilter": "periodic smoothing/re-initialisation of the density field",
     "velocityCorrection": "correction of the advection velocity (e.g. XSPH)",
     "kernelCorrection": "corrected kernels and gradients (e.g. C-SPH)",
+    "particleShifting": "particle shifting: positions move with v + delta_u towards a uniform "
+                        "distribution (beside or instead of a velocityCorrection)",
     "integrator": "time-marching scheme",
     "motion": "prescribed motion of a wall (particleDict walls.<name>.motion)",
     "waveMaker": "paddle trajectory X(t) of a wave maker (pistonPaddle waveMaker)",
@@ -74,6 +76,7 @@ MODEL_MODULES = (
     "sphfoam.models.integrators", "sphfoam.models.motion", "sphfoam.models.wavemakers",
     "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.models.metrics",
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
+    "sphfoam.models.diffusion", "sphfoam.models.shifting",
 )
 
 

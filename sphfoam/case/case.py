@@ -6,7 +6,8 @@ Layout (OpenFOAM conventions)::
     constant/g                     gravity vector
     constant/sphProperties         kernel, equationOfState, continuity, momentum, viscosity,
                                    boundary, turbulence, densityFilter, velocityCorrection,
-                                   kernelCorrection  -- each ``{ type name; coeffs }``
+                                   kernelCorrection, particleShifting
+                                   -- each ``{ type name; coeffs }``
     system/controlDict             time control, writing, function objects
     system/sphSchemes              integrator, time-step control, neighbour search
     system/particleDict            spacing, fluid blocks, walls, domain (for ``sphfoam setup``)

@@ -197,6 +197,7 @@ SPH_FAMILIES: dict[str, str | None] = {
     "densityFilter": "none",
     "velocityCorrection": "none",
     "kernelCorrection": "none",
+    "particleShifting": "none",
 }
 
 

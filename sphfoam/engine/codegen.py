@@ -72,6 +72,7 @@ class Selection:
     densityFilter: object = None
     velocityCorrection: object = None
     kernelCorrection: object = None
+    particleShifting: object = None
     adjust_time_step: bool = True
     periodic_x: bool = False
     periodic_y: bool = False
@@ -79,7 +80,8 @@ class Selection:
     def models(self):
         return [m for m in (self.kernel, self.equationOfState, self.continuity, self.momentum,
                             self.viscosity, self.turbulence, self.densityFilter,
-                            self.velocityCorrection, self.kernelCorrection, self.boundary)
+                            self.velocityCorrection, self.particleShifting,
+                            self.kernelCorrection, self.boundary)
                 if m is not None]
 
     def describe(self) -> str:
@@ -518,7 +520,9 @@ def density_rate({_ARGS}, out_drho):
 ''')
     if asm.has_stage("step"):
         step = asm.stage("step", "wall")
-        parts.append(f'''
+        fluid_step = asm.stage("step", "fluid")
+        if not any(not t.on_demand for t in fluid_step):
+            parts.append(f'''
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def step_pass({_ARGS}):
@@ -528,6 +532,23 @@ def step_pass({_ARGS}):
         if kind[a] != FLUID:
 {_block(_PARTICLE_LOAD, 12)}
 {_block(asm.gather(step), 12)}
+''')
+        else:
+            # step terms that apply to fluid particles (e.g. a free-surface detection)
+            wall_part = (asm.gather(step) if any(not t.on_demand for t in step)
+                         else "pass")
+            parts.append(f'''
+
+@njit(parallel=True, fastmath=True, cache=True)
+def step_pass({_ARGS}):
+    """Once per step, after the re-sort: per-step state of fluid and wall particles."""
+{_block(bind, 4)}
+    for a in prange(x.shape[0]):
+{_block(_PARTICLE_LOAD, 8)}
+        if kind[a] == FLUID:
+{_block(asm.gather(fluid_step), 12)}
+        else:
+{_block(wall_part, 12)}
 ''')
     if asm.has_stage("filter"):
         filt = asm.stage("filter", "fluid")
@@ -707,8 +728,10 @@ def _warm_up(module, prm):
     count = np.zeros(n, dtype=np.int64)
     grid = (x, f, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, float(prm[0]) ** 2 * 16.0)
     module.count_neighbours(*grid, count)
-    nb_start = np.array([0, 1, 2], dtype=np.int64)
-    nb_idx = np.array([1, 0], dtype=np.int32)
+    # sized from the count: with periodic axes the single cell is walked 3 x 3 times, so
+    # each particle finds its neighbour up to nine times (a fixed list of two overflowed)
+    nb_start = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    nb_idx = np.zeros(int(nb_start[-1]), dtype=np.int32)
     module.fill_neighbours(*grid, nb_start, nb_idx)
     args = (x, f, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
     funcs = [module.equation_of_state, module.count_neighbours, module.fill_neighbours,

@@ -102,10 +102,9 @@ class Simulation:
         self._hooks = {name: sel.hooks(name) for name in
                        ("before_neighbours", "add_particles", "after_sort",
                         "before_evaluation", "walls_moved", "after_step")}
-        adv = sel.hooks("advection_velocity")
-        if len(adv) > 1:
-            raise ValueError("two selected models set the advection velocity")
-        self._advection = adv[0] if adv else None
+        #: the models that make the advection velocity, applied in selection order, each to
+        #: the previous one's result (XSPH, then a particle shifting)
+        self._advection = sel.hooks("advection_velocity")
         self._summaries = sel.hooks("summary")
         #: list radius (the cell side) minus the support: how far pairs may close in
         self.skin = self.cells.cell_size - reach
@@ -223,9 +222,9 @@ class Simulation:
     def position_velocity(self, u, v):
         """The velocity positions are advanced with: (u, v) itself, or what the selected
         model that sets the advection velocity makes of it (e.g. XSPH, T(3.62))."""
-        if self._advection is None:
-            return u, v
-        return self._advection(self, u, v)
+        for advection in self._advection:
+            u, v = advection(self, u, v)
+        return u, v
 
     def filter_density(self):
         """Run the density filter's pass (T(3.64)-(3.69)); the caller decides when."""

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field, replace
 STAGES = {
     "particle": "per particle, no neighbours (the equation of state: p, c from rho)",
     "step": "once per step after the neighbour update, with a neighbour loop "
-            "(e.g. the wet/dry state of wall particles)",
+            "(e.g. the wet/dry state of wall particles, the free surface of fluid ones)",
     "prepass": "before every evaluation of the rates, with a neighbour loop: per-particle "
                "auxiliary fields the pair terms read (XSPH, C-SPH, velocity gradients)",
     "rates": "dv/dt and drho/dt (and sigma of T(3.89)) of every particle, gathered over "

@@ -38,7 +38,9 @@ selected model that implements them; the engine names no model):
 ``before_evaluation(sim)``         before every evaluation of the pipeline (e.g. refresh ghosts)
 ``walls_moved(sim, offsets, velocities)``  prescribed wall motion at a stage time
 ``after_step(sim)``                at the end of each step, before anything sees the state
-``advection_velocity(sim, u, v)``  the velocity positions move with (e.g. XSPH); at most one
+``advection_velocity(sim, u, v)``  the velocity positions move with (e.g. XSPH); several are
+                                   applied in selection order, each to the previous one's
+                                   result (XSPH's v + dv, then a shifting's + delta_u)
 ``summary()``                      a line for the end of the run's log ("" for none)
 """
 

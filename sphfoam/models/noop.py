@@ -1,5 +1,5 @@
 """The ``none`` entry of the optional families (turbulence, densityFilter,
-velocityCorrection, kernelCorrection).
+velocityCorrection, kernelCorrection, particleShifting).
 
 Selecting ``none`` contributes no term to the generated pipeline: it costs nothing.
 """
@@ -21,3 +21,4 @@ NoTurbulence = _none("turbulence", "turbulence model: the laminar equations")
 NoDensityFilter = _none("densityFilter", "density filter")
 NoVelocityCorrection = _none("velocityCorrection", "velocity correction")
 NoKernelCorrection = _none("kernelCorrection", "kernel correction")
+NoParticleShifting = _none("particleShifting", "particle shifting")

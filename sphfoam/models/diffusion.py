@@ -1,0 +1,184 @@
+"""Low-dissipation density diffusion (issue 13): two refinements of the delta-SPH term of
+Molteni & Colagrossi (2009) (``deltaSPH`` in ``sphfoam.models.filters``), selected in the
+``densityFilter`` family:
+
+* ``antuonoDeltaSPH``: the renormalised form of Antuono, Colagrossi, Marrone & Molteni
+  (2010, CPC 181) and Antuono et al. (2012, CPC 183): the pair term is corrected
+  by the renormalised density gradients of a and b, so it vanishes for every linear density
+  field, at a free surface too (where the plain term diffuses the hydrostatic gradient);
+* ``fourtakasDeltaSPH``: the hydrostatically consistent diffusion of Fourtakas, Dominguez,
+  Vacondio & Rogers (2019, Computers & Fluids 190): the pair difference of the total density
+  is replaced by that of its dynamic part rho^D = rho - rho^H, rho^H the density of the
+  hydrostatic pressure of the pair's depth difference.
+
+Both add to drho_a/dt at every evaluation of the rates (no periodic pass); the pair terms are
+antisymmetric in a and b, so sum_a V_a drho_a is unchanged by them.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from sphfoam.engine.terms import Term
+from sphfoam.models.base import CaseContext
+from sphfoam.models.filters import DensityFilter
+from sphfoam.registry import Coeffs, register
+
+
+def _dc0(name: str, delta: float, ctx: CaseContext) -> float:
+    if not ctx.c0 > 0.0:
+        raise ValueError(f"{name} needs the reference speed of sound c0 > 0 (CaseContext.c0)")
+    return delta * ctx.c0
+
+
+class _Delta(Coeffs):
+    delta: float = Field(0.1, ge=0.0, description="dimensionless diffusion coefficient delta "
+                         "(0.1 in Antuono et al. 2010 and Fourtakas et al. 2019)")
+
+
+@register
+class AntuonoDeltaSPH(DensityFilter):
+    """delta-SPH with the renormalised density gradient, Antuono et al. (2010):
+
+        drho_a/dt += delta h c0 sum_b psi_ab . grad_a W_ab V_b,
+        psi_ab = 2 (rho_b - rho_a) r_ba / |r_ba|^2 - (<grad rho>^L_a + <grad rho>^L_b),
+        <grad rho>^L_a = L_a sum_b (rho_b - rho_a) grad_a W_ab V_b,
+        L_a = (sum_b grad_a W_ab (x) r_ba V_b)^-1,
+
+    r_ba = r_b - r_a, V_b = m_b / rho_b. For a linear field rho_b - rho_a = g . r_ba and the
+    renormalised gradient is exactly g (wherever L_a exists, a truncated support included), so
+    psi_ab . r_ba = 0 and, grad_a W_ab being parallel to r_ab, every pair term vanishes. The
+    pre-pass (term ``renormalisedDensityGradient``) stores <grad rho>^L in ``aux`` for every
+    particle; its sums run over every neighbour (as XSPH's, with which it shares the pre-pass
+    loop; a dry wall particle enters with its own density), the diffusion's over fluid,
+    ghosts and wet walls. Guard: where det M / (M_xx M_yy) (Hadamard's ratio, 1 for a full symmetric
+    support) is below ``minDetRatio`` (an isolated or nearly isolated particle) the gradient is
+    set to zero, i.e. that particle's pairs fall back to the Molteni & Colagrossi term. No
+    eta^2 guard on |r|^2 (it would spoil the exactness; the pair loop has r2 > 0 and the ratio
+    (rho_b - rho_a) / |r| stays bounded for a smooth field).
+    """
+
+    name = "antuonoDeltaSPH"
+    doc = ("renormalised delta-SPH, Antuono et al. (2010): psi_ab = "
+           "2(rho_b-rho_a) r_ba/r^2 - (<grad rho>^L_a + <grad rho>^L_b), exact for linear rho")
+    _G = ("aux.rgrad_x", "aux.rgrad_y")
+
+    class Coeffs(_Delta):
+        minDetRatio: float = Field(1e-3, gt=0.0, lt=1.0, description=(
+            "a particle whose matrix sum_b grad W (x) r_ba V_b has det M < minDetRatio M_xx "
+            "M_yy (Hadamard's bound) gets a zero renormalised gradient (plain delta-SPH)"))
+
+    _INIT = """\
+filt_mxx = 0.0
+filt_mxy = 0.0
+filt_myx = 0.0
+filt_myy = 0.0
+filt_sx = 0.0
+filt_sy = 0.0
+"""
+    # M = sum_b grad_a W_ab (x) r_ba V_b, r_ba = -r_ab; s = sum_b (rho_b - rho_a) grad_a W_ab V_b
+    _PAIR = """\
+filt_vb = mb / rhob
+filt_mxx -= gWx * dx_ab * filt_vb
+filt_mxy -= gWx * dy_ab * filt_vb
+filt_myx -= gWy * dx_ab * filt_vb
+filt_myy -= gWy * dy_ab * filt_vb
+filt_drb = (rhob - rhoa) * filt_vb
+filt_sx += filt_drb * gWx
+filt_sy += filt_drb * gWy
+"""
+    # s = M g for a linear field (s_i = sum_b g_j r_ba,j gW_i V_b = M_ij g_j): g = M^-1 s
+    _FINAL = """\
+filt_det = filt_mxx * filt_myy - filt_mxy * filt_myx
+filt_had = abs(filt_mxx * filt_myy)
+if filt_had > 0.0 and abs(filt_det) > filt_min_det * filt_had:
+    aux[I_rgrad_x, a] = (filt_myy * filt_sx - filt_mxy * filt_sy) / filt_det
+    aux[I_rgrad_y, a] = (filt_mxx * filt_sy - filt_myx * filt_sx) / filt_det
+else:
+    aux[I_rgrad_x, a] = 0.0
+    aux[I_rgrad_y, a] = 0.0
+"""
+    # psi_ab . grad_a W_ab with r_ba = -r_ab: 2 (rho_a - rho_b) r_ab.gradW / r^2 - (G_a+G_b).gradW
+    _DIFFUSION = """\
+filt_psi = 2.0 * (rhoa - rhob) * (dx_ab * gWx + dy_ab * gWy) / r2 \\
+    - (aux[I_rgrad_x, a] + aux[I_rgrad_x, b]) * gWx \\
+    - (aux[I_rgrad_y, a] + aux[I_rgrad_y, b]) * gWy
+drho_a += filt_dc0 * h * filt_psi * mb / rhob
+"""
+
+    def params(self, ctx: CaseContext):
+        return {"filt_dc0": _dc0(self.name, self.coeffs.delta, ctx),
+                "filt_min_det": self.coeffs.minDetRatio}
+
+    def terms(self):
+        return [Term("renormalisedDensityGradient", ("prepass",), init=self._INIT,
+                     pair=self._PAIR, final=self._FINAL, applies=("all",), sees=("all",),
+                     reads=("gradW",), writes=self._G),
+                Term("densityDiffusion", ("rates", "density"), pair=self._DIFFUSION,
+                     reads=("gradW", *self._G), writes=("drho",))]
+
+
+@register
+class FourtakasDeltaSPH(DensityFilter):
+    """Hydrostatically consistent density diffusion of Fourtakas et al. (2019) (the form
+    DualSPHysics documents as "Fourtakas et al. 2019"):
+
+        drho_a/dt += 2 delta h c0 sum_b (rho^D_a - rho^D_b) r_ab . grad_a W_ab / |r_ab|^2 V_b,
+        rho^D_a - rho^D_b = (rho_a - rho_b) - (rho^H_a - rho^H_b),
+
+    i.e. the Molteni & Colagrossi term of the dynamic density rho^D = rho - rho^H. The
+    hydrostatic part comes from the hydrostatic pressure difference of the pair,
+    p^H_a - p^H_b = rho0 g . r_ab (g the gravity vector, so rho0 g (z_b - z_a) for gravity
+    -g e_z), through the Tait equation of state T(3.27) inverted, rho = rho0 (1 + p/C_B)^(1/gamma),
+    C_B = c0^2 rho0 / gamma:
+
+    * ``reference midpoint`` (default): both pressures taken about the pair's mid-depth,
+      rho^H_a - rho^H_b = rho0 ((1 + x/2)^(1/gamma) - (1 - x/2)^(1/gamma)), x = rho0 g . r_ab / C_B;
+      odd in r_ab, so the pair term is antisymmetric and sum_a V_a drho_a = 0 exactly;
+    * ``reference particle``: the paper's form, a's pressure as the reference,
+      rho^H_ba = rho0 ((1 + rho0 g z_ab / C_B)^(1/gamma) - 1); not odd in r_ab for gamma != 1
+      (its mass rate is of second order in x).
+
+    Both agree to first order in x (x ~ dx / (gamma H) is small) and are exact for gamma = 1
+    (the linear equation of state). A fluid at hydrostatic rest has rho^D uniform, so the term
+    vanishes there, at the free surface and the bottom too, where the plain term diffuses the
+    hydrostatic gradient across the truncated support and drives a spurious flow. ``gamma``
+    must be the equation of state's exponent (7 for the Tait default, 1 for a linear law).
+    """
+
+    name = "fourtakasDeltaSPH"
+    doc = ("hydrostatic-consistent delta-SPH, Fourtakas et al. (2019): diffusion of rho^D = "
+           "rho - rho^H, rho^H from rho0 g z_ab via Tait T(3.27), C_B = c0^2 rho0/gamma")
+
+    class Coeffs(_Delta):
+        gamma: float = Field(7.0, ge=1.0, description=(
+            "exponent of the equation of state that turns the hydrostatic pressure into "
+            "density (the Tait gamma, 7 by default; 1 for a linear equation of state)"))
+        reference: str = Field("midpoint", pattern="^(midpoint|particle)$", description=(
+            "midpoint: the pair's hydrostatic density difference about its mid-depth "
+            "(antisymmetric, conserves mass); particle: the paper's form with a as reference"))
+
+    _MIDPOINT = """\
+filt_x = filt_rho0_cb * (gx * dx_ab + gy * dy_ab)
+filt_dh = filt_rho0 * ((1.0 + 0.5 * filt_x) ** filt_ig - (1.0 - 0.5 * filt_x) ** filt_ig)
+filt_psi = 2.0 * (rhoa - rhob - filt_dh) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)
+drho_a += filt_dc0 * h * filt_psi * mb / rhob
+"""
+    _PARTICLE = """\
+filt_x = filt_rho0_cb * (gx * dx_ab + gy * dy_ab)
+filt_dh = filt_rho0 * (1.0 - (1.0 - filt_x) ** filt_ig)
+filt_psi = 2.0 * (rhoa - rhob - filt_dh) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)
+drho_a += filt_dc0 * h * filt_psi * mb / rhob
+"""
+
+    def params(self, ctx: CaseContext):
+        dc0 = _dc0(self.name, self.coeffs.delta, ctx)
+        gamma = self.coeffs.gamma
+        cb = ctx.c0 * ctx.c0 * ctx.rho0 / gamma
+        return {"filt_dc0": dc0, "filt_rho0": ctx.rho0, "filt_rho0_cb": ctx.rho0 / cb,
+                "filt_ig": 1.0 / gamma}
+
+    def terms(self):
+        code = self._MIDPOINT if self.coeffs.reference == "midpoint" else self._PARTICLE
+        return [Term("hydrostaticDensityDiffusion", ("rates", "density"), pair=code,
+                     reads=("gradW",), writes=("drho",))]

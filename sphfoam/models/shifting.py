@@ -1,0 +1,202 @@
+"""Particle shifting (issue 13): positions move with v + delta_u, delta_u pushing particles
+down the gradient of their concentration, so that they stay evenly spread (no voids, no
+clumps, no tensile clustering) without any change to their velocity or momentum.
+
+Family ``particleShifting``, selected beside a ``velocityCorrection`` (XSPH) or instead of it:
+both act through the ``advection_velocity`` hook, applied in selection order (XSPH's v + dv,
+then + delta_u).
+
+Both models share
+
+* a free-surface detection (``step`` stage, once per step): the smallest eigenvalue lambda_a of
+  M_a = sum_b grad_a W_ab (x) r_ba V_b (1 for a full support, about 0.5 on a flat free surface,
+  0 for an isolated particle), Marrone, Colagrossi, Le Touze & Graziani (2010, JCP 229),
+  and the surface normal n_a = -L_a sum_b grad_a W_ab V_b / |...|, L_a = M_a^-1 (their
+  renormalised gradient of the colour function);
+* the concentration gradient (``prepass`` stage, every evaluation; over every neighbour,
+  walls included, so that a wall's particles fill the support), with the anti-clumping
+  term of Monaghan (2000) as Lind et al. (2012) and Sun et al. (2017) write it,
+  grad C_a = sum_b (1 + R (W_ab / W(dx))^n) grad_a W_ab V_b, R = 0.2, n = 4;
+* the surface rule: a fluid particle with lambda_a < ``surfaceLambda`` (0.75, Marrone et al.'s
+  bound of the interior) or with such a fluid neighbour is near the surface and keeps only the
+  tangential part of its shift, delta_u - (delta_u . n_a) n_a (as Lind et al. 2012 do), so the
+  surface is not smeared outwards. Wall particles are never shifted.
+
+The shift moves positions only: the momentum and continuity equations use v, so linear momentum
+is unaffected (the Lagrangian re-meshing is an error of the order of the shift itself).
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from sphfoam.engine.terms import Term
+from sphfoam.models.base import CaseContext, PipelineModel
+from sphfoam.models.corrections import add_correction
+from sphfoam.registry import Coeffs, register
+
+
+class _ShiftCoeffs(Coeffs):
+    R: float = Field(0.2, ge=0.0, description="strength R of the anti-clumping term "
+                     "(1 + R (W_ab/W(dx))^n), 0.2 in Lind et al. 2012 and Sun et al. 2017")
+    n: float = Field(4.0, gt=0.0, description="exponent n of the anti-clumping term (4)")
+    surfaceLambda: float = Field(0.75, ge=0.0, le=1.0, description=(
+        "a fluid particle whose lambda (smallest eigenvalue of sum grad W (x) r_ba V_b) or a "
+        "fluid neighbour's is below this is near the free surface and is shifted only "
+        "tangentially (0.75: Marrone et al. 2010's interior bound; 0: never)"))
+
+
+class ParticleShifting(PipelineModel):
+    """Shared terms (see the module docstring); a subclass sets the magnitude ``_COEF``: the
+    code of ``shift_k`` with delta_u_a = -shift_k grad C_a."""
+
+    family = "particleShifting"
+    prefix = "shift_"
+    _SURF = ("aux.shift_lambda", "aux.shift_nx", "aux.shift_ny")
+    _DU = ("aux.shift_du", "aux.shift_dv")
+    _COEF: str
+
+    _DETECT_INIT = """\
+shift_mxx = 0.0
+shift_mxy = 0.0
+shift_myx = 0.0
+shift_myy = 0.0
+shift_gx = 0.0
+shift_gy = 0.0
+"""
+    # M = sum_b grad_a W_ab (x) r_ba V_b with r_ba = -r_ab; nu = sum_b grad_a W_ab V_b
+    _DETECT_PAIR = """\
+shift_vb = mb / rhob
+shift_mxx -= gWx * dx_ab * shift_vb
+shift_mxy -= gWx * dy_ab * shift_vb
+shift_myx -= gWy * dx_ab * shift_vb
+shift_myy -= gWy * dy_ab * shift_vb
+shift_gx += gWx * shift_vb
+shift_gy += gWy * shift_vb
+"""
+    _DETECT_FINAL = """\
+shift_sxy = 0.5 * (shift_mxy + shift_myx)
+shift_half = 0.5 * (shift_mxx - shift_myy)
+aux[I_shift_lambda, a] = 0.5 * (shift_mxx + shift_myy) - math.sqrt(shift_half * shift_half
+                                                                   + shift_sxy * shift_sxy)
+shift_det = shift_mxx * shift_myy - shift_mxy * shift_myx
+if abs(shift_det) > 1e-3 * abs(shift_mxx * shift_myy) and abs(shift_det) > 0.0:
+    shift_nx = -(shift_myy * shift_gx - shift_mxy * shift_gy) / shift_det
+    shift_ny = -(shift_mxx * shift_gy - shift_myx * shift_gx) / shift_det
+else:
+    shift_nx = -shift_gx
+    shift_ny = -shift_gy
+shift_nn = math.sqrt(shift_nx * shift_nx + shift_ny * shift_ny)
+if shift_nn > 0.0:
+    aux[I_shift_nx, a] = shift_nx / shift_nn
+    aux[I_shift_ny, a] = shift_ny / shift_nn
+else:
+    aux[I_shift_nx, a] = 0.0
+    aux[I_shift_ny, a] = 0.0
+"""
+    _SHIFT_INIT = """\
+shift_cx = 0.0
+shift_cy = 0.0
+shift_near = aux[I_shift_lambda, a] < shift_lam
+shift_iwdx = 1.0 / (kern_w * kernel_f(shift_qdx))
+"""
+    _SHIFT_PAIR = """\
+shift_w = 1.0 + shift_r * (Wab * shift_iwdx) ** shift_n
+shift_cx += shift_w * gWx * mb / rhob
+shift_cy += shift_w * gWy * mb / rhob
+if kindb == FLUID and aux[I_shift_lambda, b] < shift_lam:
+    shift_near = True
+"""
+    _SHIFT_FINAL = """\
+if kind[a] == FLUID:
+{coef}
+    shift_du = -shift_k * shift_cx
+    shift_dv = -shift_k * shift_cy
+    if shift_near:
+        shift_dn = shift_du * aux[I_shift_nx, a] + shift_dv * aux[I_shift_ny, a]
+        shift_du -= shift_dn * aux[I_shift_nx, a]
+        shift_dv -= shift_dn * aux[I_shift_ny, a]
+    aux[I_shift_du, a] = shift_du
+    aux[I_shift_dv, a] = shift_dv
+else:
+    aux[I_shift_du, a] = 0.0
+    aux[I_shift_dv, a] = 0.0
+"""
+
+    def imports(self):
+        return ["import math"]
+
+    def params(self, ctx: CaseContext):
+        c = self.coeffs
+        return {"shift_r": c.R, "shift_n": c.n, "shift_lam": c.surfaceLambda,
+                "shift_qdx": ctx.dx / ctx.h, **self.magnitude(ctx)}
+
+    def magnitude(self, ctx: CaseContext) -> dict[str, float]:
+        return {}
+
+    def terms(self):
+        final = self._SHIFT_FINAL.replace("{coef}", "    " + self._COEF)
+        return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
+                     pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
+                     reads=("gradW",), writes=self._SURF),
+                Term("shiftingVector", ("prepass",), init=self._SHIFT_INIT,
+                     pair=self._SHIFT_PAIR, final=final, applies=("all",), sees=("all",),
+                     reads=("W", "gradW", *self._SURF), writes=self._DU)]
+
+    def advection_velocity(self, sim, u, v):
+        """Positions move with (u, v) + delta_u of the last pre-pass (walls: unchanged)."""
+        pipe = sim.pipeline
+        du = sim.aux[pipe.aux_index("shift_du")]
+        dv = sim.aux[pipe.aux_index("shift_dv")]
+        return add_correction(u, du, sim.state.kind), add_correction(v, dv, sim.state.kind)
+
+
+@register
+class LindShifting(ParticleShifting):
+    """Fickian shifting of Lind, Xu, Stansby & Rogers (2012, JCP 231):
+    delta_r_a = -D grad C_a with D = A h |v_a| dt, i.e. the shifting velocity
+    delta_u_a = delta_r_a / dt = -A h |v_a| grad C_a (independent of the step), A = 2 (their
+    range 1 to 6); grad C with Monaghan's anti-clumping term and the surface rule of the module
+    docstring. A particle at rest is not shifted.
+    """
+
+    name = "lindShifting"
+    doc = ("Lind et al. (2012): delta_r = -A h |v| dt grad C, i.e. delta_u = -A h |v| grad C, grad C = sum_b "
+           "(1 + R(W_ab/W(dx))^n) grad W_ab V_b; tangential only near the free surface")
+
+    class Coeffs(_ShiftCoeffs):
+        A: float = Field(2.0, gt=0.0, description="dimensionless shifting coefficient A of "
+                         "D = A h |v| dt (Lind et al. 2012: 1 to 6)")
+
+    _COEF = "shift_k = shift_ah * math.sqrt(ua * ua + va * va)"
+
+    def magnitude(self, ctx):
+        return {"shift_ah": self.coeffs.A * ctx.h}
+
+
+@register
+class DeltaPlusShifting(ParticleShifting):
+    """delta+-SPH shifting of Sun, Colagrossi, Marrone & Zhang (2017, CMAME 315):
+    delta_r_a = -CFL Ma (2h)^2 sum_b (1 + R (W_ab/W(dx))^n) grad_a W_ab V_b, written as a
+    velocity with the acoustic time step of the same CFL number, dt = CFL h / c0:
+    delta_u_a = -4 Ma c0 h grad C_a (the CFL cancels), Ma = U_max / c0 (0.1 for the usual
+    c0 = 10 U_max). Independent of the particle's own speed; surface rule of the module
+    docstring.
+    """
+
+    name = "deltaPlusShifting"
+    doc = ("delta+-SPH shifting, Sun et al. (2017): delta_r = -CFL Ma (2h)^2 grad C, "
+           "as delta_u = -4 Ma c0 h grad C; tangential only near the free surface")
+
+    class Coeffs(_ShiftCoeffs):
+        Ma: float = Field(0.1, gt=0.0, description="Mach number U_max / c0 of the flow (0.1 "
+                          "for c0 = 10 U_max)")
+
+    _COEF = "shift_k = shift_c"
+
+    def magnitude(self, ctx):
+        if not ctx.c0 > 0.0:
+            raise ValueError("deltaPlusShifting needs the reference speed of sound c0 > 0")
+        return {"shift_c": 4.0 * self.coeffs.Ma * ctx.c0 * ctx.h}
+
+

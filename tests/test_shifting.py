@@ -1,0 +1,249 @@
+"""Particle shifting (sphfoam/models/shifting.py), issue 13: Lind et al. (2012) and the
+delta+-SPH form of Sun et al. (2017), with Marrone et al. (2010)'s free-surface detection.
+
+* a uniform lattice in a periodic box is not shifted;
+* a perturbed lattice becomes more uniform (the spread of nearest-neighbour distances shrinks);
+* at a flat free surface the shift has no normal component (and has one without the surface
+  rule, so the check can fail);
+* the shift moves positions only: the velocities are untouched and momentum is conserved over
+  steps; beside XSPH the advection velocity is v + dv_XSPH + delta_u.
+
+Two pipelines are compiled: deltaPlusShifting alone, and XSPH with lindShifting, both in a
+periodic box (a slab with empty space above and below gives two flat free surfaces).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from sphfoam import registry
+from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.simulation import Simulation
+from sphfoam.engine.state import ParticleState
+from sphfoam.models.base import CaseContext
+
+DX, HDX, NX = 0.01, 1.3, 16
+H = HDX * DX
+L = NX * DX                    # periodic box L x 2L
+C0 = 10.0
+SPECS = dict(kernel={"type": "quartic"}, equationOfState={"type": "tait", "speedOfSound": C0},
+             continuity={"type": "differenceForm"}, momentum={"type": "symmetric"},
+             viscosity={"type": "artificial", "alpha": 0.1},
+             boundary={"type": "stationaryGhosts"})
+CTX = CaseContext(dx=DX, h=H, rho0=1000.0, nu=1e-6, g=(0.0, 0.0), fluid_height=L, c0=C0)
+
+
+class Box:
+    def __init__(self, shifting: dict, vc: str = "none"):
+        models = {f: registry.build(f, s) for f, s in SPECS.items()}
+        self.sel = Selection(**models,
+                             velocityCorrection=registry.build("velocityCorrection",
+                                                               {"type": vc}),
+                             particleShifting=registry.build("particleShifting", shifting),
+                             periodic_x=True, periodic_y=True)
+        self.kappa = models["kernel"].support
+        self.pipe = build_pipeline(self.sel, CTX, domain_hi=(L, 2 * L))
+
+    def sim(self, x, y, u=None, v=None):
+        n = x.size
+        u = np.zeros(n) if u is None else u
+        v = np.zeros(n) if v is None else v
+        st = ParticleState(x, y, u, v, np.full(n, 1000.0), np.full(n, 1000.0 * DX * DX),
+                           np.zeros(n, dtype=np.int64))
+        sim = Simulation(st, self.pipe, registry.build("integrator", {"type": "monaghan2007"}),
+                         h=H, support=self.kappa, domain_lo=(0, 0), domain_hi=(L, 2 * L),
+                         beta=0.2, force_condition=True, adjust_time_step=True, delta_t=1e-4)
+        self.evaluate(sim)
+        return sim
+
+    @staticmethod
+    def evaluate(sim):
+        sim.neighbour_update()
+        sim.step_pass()
+        sim.eos()
+        sim.rates()
+
+    def shift(self, sim):
+        a = sim.aux
+        return a[self.pipe.aux_index("shift_du")], a[self.pipe.aux_index("shift_dv")]
+
+
+@pytest.fixture(scope="module")
+def dplus():
+    return Box({"type": "deltaPlusShifting"})
+
+
+@pytest.fixture(scope="module")
+def lind():
+    return Box({"type": "lindShifting"}, vc="xsph")
+
+
+def lattice(rows=2 * NX, y0=0.0):
+    xs = (np.arange(NX) + 0.5) * DX
+    ys = y0 + (np.arange(rows) + 0.5) * DX
+    X, Y = np.meshgrid(xs, ys)
+    return X.ravel(), Y.ravel()
+
+
+def perturbed(seed=0, amp=0.2):
+    x, y = lattice()
+    rng = np.random.default_rng(seed)
+    return (x + rng.uniform(-amp, amp, x.size) * DX, y + rng.uniform(-amp, amp, x.size) * DX)
+
+
+def nn_spread(st):
+    d, _ = cKDTree(np.column_stack([st.x, st.y]), boxsize=(L, 2 * L)).query(
+        np.column_stack([st.x, st.y]), k=2)
+    return np.std(d[:, 1]) / DX
+
+
+def test_uniform_lattice_is_not_shifted(dplus, lind):
+    x, y = lattice()
+    sim = dplus.sim(x, y)
+    du, dv = dplus.shift(sim)
+    assert np.abs(du).max() < 1e-10 * C0 and np.abs(dv).max() < 1e-10 * C0
+    # interior everywhere: lambda = 1 to the kernel's discrete normalisation
+    lam = sim.aux[dplus.pipe.aux_index("shift_lambda")]
+    assert np.allclose(lam, lam[0]) and abs(lam[0] - 1.0) < 0.02
+    # Lind's shift with XSPH in a uniform stream: the advection velocity is the stream's
+    u0 = np.full(x.size, 0.7)
+    sim = lind.sim(x, y, u=u0)
+    pu, pv = sim.position_velocity(sim.state.u, sim.state.v)
+    assert np.allclose(pu, 0.7, rtol=0, atol=1e-12) and np.abs(pv).max() < 1e-12
+
+
+def _relax(box, sim, dt, steps):
+    for _ in range(steps):
+        st = sim.state
+        pu, pv = sim.position_velocity(st.u, st.v)
+        st.x += dt * (pu - st.u)           # the shift alone (the stream carries all alike)
+        st.y += dt * (pv - st.v)
+        box.evaluate(sim)
+
+
+def test_delta_plus_makes_a_perturbed_lattice_more_uniform(dplus):
+    sim = dplus.sim(*perturbed(1))
+    s0 = nn_spread(sim.state)
+    du, dv = dplus.shift(sim)
+    assert np.hypot(du, dv).max() > 0.0
+    _relax(dplus, sim, 0.2 * H / C0, 40)    # CFL 0.2 steps
+    assert nn_spread(sim.state) < 0.6 * s0, (s0, nn_spread(sim.state))
+
+
+def test_lind_makes_a_perturbed_lattice_more_uniform(lind):
+    x, y = perturbed(2)
+    u0 = np.full(x.size, 1.0)
+    sim = lind.sim(x, y, u=u0)
+    s0 = nn_spread(sim.state)
+    _relax(lind, sim, 0.1 * H / 1.0, 40)
+    assert nn_spread(sim.state) < 0.6 * s0, (s0, nn_spread(sim.state))
+    # a particle at rest is not shifted by Lind's D = A h |v| dt (XSPH of a fluid at rest: 0)
+    sim0 = lind.sim(x, y)
+    pu, pv = sim0.position_velocity(sim0.state.u, sim0.state.v)
+    assert np.all(pu == 0.0) and np.all(pv == 0.0)
+
+
+def test_flat_free_surface_is_shifted_only_tangentially(dplus):
+    """A slab of 10 rows in the middle of the 2L-tall box: two flat free surfaces, perturbed
+    in x only, so the shift has a tangential part everywhere and a normal one at the surfaces
+    (without the surface rule)."""
+    x, y = lattice(rows=10, y0=0.5 * L)
+    rng = np.random.default_rng(4)
+    x = x + rng.uniform(-0.15, 0.15, x.size) * DX
+    sim = dplus.sim(x, y)
+    st = sim.state
+    lam = sim.aux[dplus.pipe.aux_index("shift_lambda")]
+    ny = sim.aux[dplus.pipe.aux_index("shift_ny")]
+    top = st.y > y.max() - 0.5 * DX
+    bottom = st.y < y.min() + 0.5 * DX
+    mid = np.abs(st.y - 0.5 * (y.min() + y.max())) < 1.1 * DX
+    # Marrone et al.'s detection: the surface rows are below the interior bound, the middle
+    # of the slab is not; the normals point out of the fluid
+    assert lam[top].max() < 0.75 and lam[bottom].max() < 0.75 and lam[mid].min() > 0.75
+    assert np.all(ny[top] > 0.9) and np.all(ny[bottom] < -0.9)
+    du, dv = dplus.shift(sim)
+    near = np.abs(st.y - 0.5 * (y.min() + y.max())) > 2.1 * DX   # rows 0-2 from a surface
+    assert np.abs(du[near]).max() > 0.0
+    # only tangential near the surface; the normal direction per particle is its own n
+    nx = sim.aux[dplus.pipe.aux_index("shift_nx")]
+    assert np.abs(du * nx + dv * ny)[near].max() < 1e-12 * np.abs(du).max()
+    # without the surface rule the surface rows are pushed outwards: the check can fail
+    free = Box({"type": "deltaPlusShifting", "surfaceLambda": 0.0})
+    sim_f = free.sim(x, y)
+    dvf = free.shift(sim_f)[1]
+    tf = sim_f.state.y > y.max() - 0.5 * DX
+    assert dvf[tf].min() > 0.1 * np.abs(du).max()
+
+
+def test_shifting_moves_positions_only_and_conserves_momentum(lind):
+    x, y = perturbed(3)
+    rng = np.random.default_rng(3)
+    u, v = rng.normal(0, 0.3, x.size), rng.normal(0, 0.3, x.size)
+    sim = lind.sim(x, y, u.copy(), v.copy())
+    st = sim.state
+    u_before, v_before = st.u.copy(), st.v.copy()
+    pu, pv = sim.position_velocity(st.u, st.v)
+    assert np.array_equal(st.u, u_before) and np.array_equal(st.v, v_before)
+    # beside XSPH: v + dv_XSPH + delta_u, in selection order
+    a = sim.aux
+    idx = lind.pipe.aux_index
+    assert np.allclose(pu, st.u + a[idx("xsph_du")] + a[idx("shift_du")], rtol=0, atol=1e-14)
+    assert np.allclose(pv, st.v + a[idx("xsph_dv")] + a[idx("shift_dv")], rtol=0, atol=1e-14)
+    assert np.abs(a[idx("shift_du")]).max() > 1e-3 * np.abs(st.u).max()
+    mom = lambda s: np.array([np.sum(s.m * s.u), np.sum(s.m * s.v)])  # noqa: E731
+    p0 = mom(st)
+    scale = np.sum(st.m * np.hypot(st.u, st.v))
+    for _ in range(20):
+        sim.step()
+    assert np.abs(mom(sim.state) - p0).max() < 1e-12 * scale
+
+
+def test_tank_runs_with_shifting_beside_xsph_and_renormalised_diffusion(tutorial):
+    """The hydrostaticTank case selecting the new words in constant/sphProperties (the case
+    layer, the runner and the log): 0.1 s at H/dx = 8 stays at rest and in the tank."""
+    import math
+
+    from sphfoam.case.times import list_times
+    from sphfoam.io.fields import read_state
+    from sphfoam.runner import run_case
+
+    case = tutorial("hydrostaticTank", {
+        "constant/sphProperties:densityFilter": {"type": "antuonoDeltaSPH"},
+        "constant/sphProperties:velocityCorrection": {"type": "xsph"},
+        "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting"},
+        "system/particleDict:dx": 0.05, "system/controlDict:endTime": 0.1,
+        "system/controlDict:writeInterval": 0.1})
+    rep = run_case(case, progress=False, echo=None)
+    assert rep.removed == 0
+    log = (case / "log.sphfoam").read_text()
+    assert "particleShifting=deltaPlusShifting" in log and "velocityCorrection=xsph" in log
+    s = read_state(list_times(case)[-1][1])
+    f = s["type"] == 0
+    assert np.all(np.isfinite(s["positions"]))
+    x, y = s["positions"][f].T
+    assert x.min() > 0 and x.max() < 0.5 and y.min() > 0
+    assert np.sqrt((s["U"][f] ** 2).sum(axis=1)).max() < 0.05 * math.sqrt(9.81 * 0.4)
+
+
+def test_contract_extensions_step_terms_for_fluid_and_composed_advection(dplus, lind):
+    """The two generic extensions the shifting needs: a ``step`` term applying to ``fluid``
+    runs for fluid particles (before, the step pass ran for walls only and such a term was
+    silently dropped); several ``advection_velocity`` hooks compose in selection order."""
+    src = lind.pipe.source_path.read_text()
+    step = src[src.index("def step_pass"):]
+    assert "if kind[a] == FLUID:" in step.split("\ndef ")[0] and "shift_mxx" in step
+    # without a fluid step term the step pass keeps its wall-only form (hybrid's)
+    models = {f: registry.build(f, s) for f, s in SPECS.items()}
+    models["boundary"] = registry.build("boundary", {"type": "hybrid"})
+    names = ["h", "inv_h", "support2", "eta2", "gx", "gy"]
+    for mdl in Selection(**models).models():
+        names += list(mdl.params(CTX))
+    from sphfoam.engine.codegen import generate_source
+    hyb = generate_source(Selection(**models), names)
+    hstep = hyb[hyb.index("def step_pass"):].split("\ndef ")[0]
+    assert "if kind[a] != FLUID:" in hstep and "kind[a] == FLUID" not in hstep
+    # composition: XSPH's hook first, then the shifting's
+    hooks = lind.sel.hooks("advection_velocity")
+    assert [h.__self__.family for h in hooks] == ["velocityCorrection", "particleShifting"]
