@@ -1,0 +1,292 @@
+"""Issue 13: the Riemann-solver formulation of Zhang, Hu & Adams (2017) (``continuity riemann``,
+``momentum riemann``) and the wall boundary of Adami, Hu & Adams (2012) (``boundary adami``),
+with the contract's prepass for wall particles that sets their state (p, rho, u) in place."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sphfoam import registry
+from sphfoam.case.case import Case
+from sphfoam.case.times import list_times
+from sphfoam.engine import terms as T
+from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.simulation import Simulation
+from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.io.fields import read_state
+from sphfoam.models.base import CaseContext, PipelineModel
+from sphfoam.runner import run_case, setup_case
+
+RHO0, G = 1000.0, 9.81
+DX, HDX, C0 = 0.01, 1.3, 20.0
+H = HDX * DX
+GAMMA = 7.0
+B = C0 ** 2 * RHO0 / GAMMA
+
+
+def _pipeline(g=(0.0, 0.0), **over):
+    specs = dict(kernel={"type": "quartic", "hdx": HDX},
+                 equationOfState={"type": "tait", "speedOfSound": C0},
+                 continuity={"type": "riemann"}, momentum={"type": "riemann"},
+                 viscosity={"type": "none"}, boundary={"type": "stationaryGhosts"})
+    specs.update(over)
+    sel = Selection(*(registry.build(f, s) for f, s in specs.items()))
+    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=g, fluid_height=0.1, c0=C0)
+    return build_pipeline(sel, ctx)
+
+
+def _sim(pipe, x, y, u, v, rho, kind, extra=None):
+    n = x.size
+    st = ParticleState(x, y, u, v, rho, np.full(n, RHO0 * DX * DX), kind, extra=extra)
+    integ = registry.build("integrator", {"type": "monaghan2007"})
+    sim = Simulation(st, pipe, integ, domain_lo=(-1.0, -1.0), domain_hi=(1.0, 1.0),
+                     beta=0.2, force_condition=True, adjust_time_step=True, delta_t=1e-4)
+    sim.neighbour_update()
+    sim.eos()
+    sim.rates()
+    return sim
+
+
+def _lattice(nx, ny, y0=0.5 * DX):
+    i, j = np.meshgrid(np.arange(nx), np.arange(ny))
+    return (i.ravel() + 0.5) * DX, y0 + j.ravel() * DX
+
+
+# ============================================================================================
+# Riemann solver, ZHA17
+# ============================================================================================
+@pytest.fixture(scope="module")
+def riemann_pipe():
+    return _pipeline()
+
+
+def test_a_uniform_state_gives_zero_rates(riemann_pipe):
+    """Uniform rho, p and velocity on a lattice: away from the cloud's edge (one support)
+    dv/dt = 0 and drho/dt = 0 (no pair has a jump for the solver to dissipate)."""
+    x, y = _lattice(14, 14)
+    n = x.size
+    rho = np.full(n, RHO0 * 1.003)
+    sim = _sim(riemann_pipe, x, y, np.full(n, 0.7), np.full(n, -0.3), rho,
+               np.full(n, FLUID))
+    st = sim.state
+    inner = ((st.x > 3.5 * DX) & (st.x < 10.5 * DX) & (st.y > 3.5 * DX) & (st.y < 10.5 * DX))
+    assert inner.sum() == 36
+    scale = st.p[0] / RHO0 / DX                     # |p grad W / rho| of one pair
+    assert np.abs(st.ax[inner]).max() < 1e-9 * scale
+    assert np.abs(st.ay[inner]).max() < 1e-9 * scale
+    assert np.abs(st.drho[inner]).max() < 1e-9 * RHO0 * 0.7 / DX
+
+
+def test_momentum_is_conserved_in_an_isolated_cloud(riemann_pipe):
+    """A disordered cloud with random velocities and densities, no gravity: every pair force
+    is antisymmetric, so sum_a m_a a_a = 0 to round-off (and sum_a drho_a m_a / rho_a
+    does not vanish, but drho is finite)."""
+    rng = np.random.default_rng(3)
+    x, y = _lattice(10, 10)
+    x = x + rng.uniform(-0.2, 0.2, x.size) * DX
+    y = y + rng.uniform(-0.2, 0.2, y.size) * DX
+    n = x.size
+    sim = _sim(riemann_pipe, x, y, rng.normal(0, 0.5, n), rng.normal(0, 0.5, n),
+               RHO0 * (1.0 + rng.uniform(-0.01, 0.01, n)), np.full(n, FLUID))
+    st = sim.state
+    fx, fy = st.m * st.ax, st.m * st.ay
+    assert np.abs(fx).sum() > 0.0 and np.isfinite(st.drho).all()
+    assert abs(fx.sum()) < 1e-12 * np.abs(fx).sum()
+    assert abs(fy.sum()) < 1e-12 * np.abs(fy).sum()
+
+
+def _pair_acc(pipe, du):
+    """Acceleration of particle a at the origin from b at (0.8 h, 0), with equal pressure,
+    b moving at -du along x (du > 0: the pair closes, U_L - U_R = du)."""
+    x = np.array([0.0, 0.8 * H])
+    y = np.zeros(2)
+    rho = np.full(2, RHO0 * 1.002)
+    sim = _sim(pipe, x, y, np.zeros(2), np.zeros(2), rho, np.full(2, FLUID))
+    st = sim.state
+    a = int(np.flatnonzero(st.x == 0.0)[0])
+    st.u[1 - a] = -du
+    sim.rates()
+    return st.ax[a], st.p[a], st.c[a], st.rho[a]
+
+
+@pytest.mark.parametrize("du", [-2.0, -0.1, 0.1, 2.0, 30.0])
+def test_the_limiter_dissipates_only_in_compression(riemann_pipe, du):
+    """P* / p_bar of the pair against ZHA17's limiter beta = min(3 max(du, 0), c_bar):
+    exactly 1 (no dissipation) in expansion, 1 + 3 du^2 rho / (2 p) in weak compression,
+    1 + c du rho / (2 p) in strong compression."""
+    ax, p, c, rho = _pair_acc(riemann_pipe, du)
+    ax0, *_ = _pair_acc(riemann_pipe, 0.0)
+    beta = min(3.0 * max(du, 0.0), c)
+    assert ax / ax0 == pytest.approx(1.0 + 0.5 * beta * rho * du / p, rel=1e-9)
+    if du < 0:
+        assert ax == pytest.approx(ax0, rel=1e-12)
+
+
+def test_the_acoustic_solver_dissipates_in_expansion_too():
+    pipe = _pipeline(momentum={"type": "riemann", "limiter": "none"})
+    ax, p, c, rho = _pair_acc(pipe, -0.1)
+    ax0, *_ = _pair_acc(pipe, 0.0)
+    assert ax / ax0 == pytest.approx(1.0 - 0.5 * c * rho * 0.1 / p, rel=1e-9)
+
+
+def test_riemann_continuity_diffuses_a_pressure_jump(riemann_pipe):
+    """At rest, a particle of higher pressure than its neighbour loses density at the rate of
+    the solver's U*: drho_a = -2 rho_a m_b/rho_b (p_a - p_b)/(2 rho_bar c_bar) |dW/dr|."""
+    x = np.array([0.0, 0.8 * H])
+    rho = np.array([RHO0 * 1.004, RHO0 * 1.001])
+    sim = _sim(riemann_pipe, x, np.zeros(2), np.zeros(2), np.zeros(2), rho,
+               np.full(2, FLUID))
+    st = sim.state
+    a, b = (0, 1) if st.x[0] == 0.0 else (1, 0)
+    kern = registry.get("kernel", "quartic")
+    from sphfoam.models.kernels import quartic_dfdq_q
+    q = 0.8
+    dwdr = kern.alpha_2d / H ** 4 * quartic_dfdq_q(q) * 0.8 * H
+    rb, cb = 0.5 * (st.rho[a] + st.rho[b]), 0.5 * (st.c[a] + st.c[b])
+    want = 2.0 * st.rho[a] * st.m[b] / st.rho[b] * (st.p[a] - st.p[b]) / (2 * rb * cb) * dwdr
+    assert st.p[a] > st.p[b] and st.drho[a] < 0.0
+    assert st.drho[a] == pytest.approx(want, rel=1e-9)
+    assert st.drho[b] == pytest.approx(-want * (st.rho[b] / st.rho[a]) ** 2, rel=1e-9)
+
+
+# ============================================================================================
+# Adami walls, AHA12
+# ============================================================================================
+def _bed(pipe, u_fluid=0.0, v_fluid=0.0, depth=12, width=16):
+    """A hydrostatic column (p_f = rho0 g (D - y), rho_f by the inverse Tait) over three
+    rows of wall particles at y = -dx/2, -3dx/2, -5dx/2 (the wall line y = 0)."""
+    xf, yf = _lattice(width, depth)
+    xw, yw = _lattice(width, 3, y0=-2.5 * DX)
+    D = depth * DX
+    pf = RHO0 * G * (D - yf)
+    rhof = RHO0 * (1.0 + pf / B) ** (1.0 / GAMMA)
+    x, y = np.r_[xf, xw], np.r_[yf, yw]
+    n = x.size
+    kind = np.r_[np.full(xf.size, FLUID), np.full(xw.size, WALL)]
+    u = np.r_[np.full(xf.size, u_fluid), np.zeros(xw.size)]
+    v = np.r_[np.full(xf.size, v_fluid), np.zeros(xw.size)]
+    rho = np.r_[rhof, np.full(xw.size, RHO0)]
+    extra = {"nx": np.zeros(n), "ny": np.r_[np.zeros(xf.size), np.ones(xw.size)],
+             "corner": np.zeros(n)}
+    sim = _sim(pipe, x, y, u, v, rho, kind, extra)
+    return sim, D
+
+
+def _adami(noslip=True):
+    return _pipeline(g=(0.0, -G), continuity={"type": "densityWeighted"},
+                     momentum={"type": "symmetric"},
+                     boundary={"type": "adami", "noSlip": noslip})
+
+
+@pytest.fixture(scope="module")
+def adami_pipe():
+    return _adami()
+
+
+def test_extrapolated_wall_pressure_is_hydrostatic_at_a_flat_bed(adami_pipe):
+    """AHA12 eq. (27) at a flat bed under a hydrostatic column: p_w = rho g (D - y_w)
+    within 0.5 % of the bed pressure, in every row (also the deepest, 2.5 dx below);
+    rho_w = the inverse Tait of p_w."""
+    sim, D = _bed(adami_pipe)
+    st = sim.state
+    w = (st.kind == WALL) & (st.x > 3 * DX) & (st.x < 13 * DX)
+    want = RHO0 * G * (D - st.y[w])
+    assert np.abs(st.p[w] - want).max() < 0.005 * RHO0 * G * D
+    assert st.rho[w] == pytest.approx(RHO0 * (1.0 + st.p[w] / B) ** (1.0 / GAMMA), rel=1e-12)
+    # the bed's fluid row then feels (almost) no net vertical force
+    f = (st.kind == FLUID) & (st.y < DX) & (st.x > 3 * DX) & (st.x < 13 * DX)
+    assert np.abs(st.ay[f]).max() < 0.05 * G
+
+
+@pytest.mark.parametrize("noslip", [True, False])
+def test_wall_velocity_is_no_slip_or_free_slip(adami_pipe, noslip):
+    """Fluid moving at (U, V) over a fixed bed: no slip gives u_w = 2 * 0 - (U, V)
+    (AHA12 eq. (22)); free slip keeps the fluid's tangential U and mirrors the normal V.
+    Put back to the prescribed zero before the next evaluation."""
+    pipe = adami_pipe if noslip else _adami(False)
+    U, V = 0.3, -0.05
+    sim, _ = _bed(pipe, U, V)
+    st = sim.state
+    w = (st.kind == WALL) & (st.x > 3 * DX) & (st.x < 13 * DX)
+    assert st.u[w] == pytest.approx(-U if noslip else U, rel=1e-9)
+    assert st.v[w] == pytest.approx(-V, rel=1e-9)
+    sim._run_hooks("after_step")
+    assert (st.u[st.kind == WALL] == 0.0).all() and (st.v[st.kind == WALL] == 0.0).all()
+
+
+def test_hydrostatic_tank_at_rest_with_adami_walls_and_the_riemann_scheme(tutorial):
+    """The hydrostatic tank (H/dx = 10, 0.8 s) with ``adami`` walls and both Riemann
+    halves: nobody in a wall, bed pressure (as in tests/test_boundaries.py) within 3 % of
+    rho g H, mean vertical velocity below 5 mm/s at the end."""
+    from sphfoam.sampling.hydrostatic import bed_pressure
+
+    dx, Hw, W = 0.04, 0.4, 0.5
+    case = tutorial("hydrostaticTank", {"constant/sphProperties:boundary.type": "adami",
+                                        "constant/sphProperties:momentum.type": "riemann",
+                                        "constant/sphProperties:continuity.type": "riemann",
+                                        "system/particleDict:dx": dx,
+                                        "system/controlDict:endTime": 0.8,
+                                        "system/controlDict:writeInterval": 0.1})
+    setup_case(Case(case), log=lambda m: None)
+    rep = run_case(case, progress=False, echo=None)
+    assert rep.removed == 0
+    times = list_times(case)[1:]
+    assert len(times) == 8
+    for t, folder in times:
+        s = read_state(folder)
+        f = s["type"] == FLUID
+        x, y = s["positions"][f].T
+        assert x.min() > 0 and x.max() < W and y.min() > 0, f"a particle in a wall at t={t}"
+    bed = bed_pressure(x, y, s["p"][f], x0=0.0, width=W, depth=Hw, reach=3.25 * dx, dx=dx)[0]
+    assert bed == pytest.approx(RHO0 * G * Hw, rel=0.03)
+    assert abs(s["U"][f][:, 1].mean()) < 0.005
+    w = s["type"] == WALL
+    assert (s["U"][w] == 0.0).all()                 # written with the prescribed velocity
+
+
+# ============================================================================================
+# the contract: a prepass for wall particles only, setting their state first
+# ============================================================================================
+class _WallMark(PipelineModel):
+    """Test model: a wall-only prepass term that sets p of wall particles to their fluid
+    neighbour count, and a second prepass term (every particle) that reads it."""
+
+    family = "velocityCorrection"
+    name = "testWallMark"
+    doc = "test model"
+    prefix = "vc_"
+
+    def terms(self):
+        return [T.Term("mark", ("prepass",), init="vc_n = 0.0", pair="vc_n += 1.0",
+                       final="p[a] = vc_n", applies=("wall",), sees=("fluid",),
+                       corrects=("p",)),
+                T.Term("read", ("prepass",), init="vc_s = 0.0", pair="vc_s += pb",
+                       final="aux[I_vc_s, a] = vc_s", applies=("all",), sees=("all",),
+                       writes=("aux.vc_s",))]
+
+
+def test_a_wall_prepass_sets_the_state_before_the_other_prepass_terms_read_it():
+    sel = Selection(*(registry.build(f, s) for f, s in dict(
+        kernel={"type": "quartic", "hdx": HDX}, equationOfState={"type": "tait"},
+        continuity={"type": "differenceForm"}, momentum={"type": "symmetric"},
+        viscosity={"type": "none"}, boundary={"type": "stationaryGhosts"}).items()))
+    sel.velocityCorrection = _WallMark()
+    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=(0.0, 0.0), fluid_height=0.1,
+                      c0=C0)
+    pipe = build_pipeline(sel, ctx)
+    src = pipe.source_path.read_text()
+    pre = src[src.index("def prepass"):src.index("def rates")]
+    assert pre.count("for a in prange") == 2
+    assert pre.index("p[a] = vc_n") < pre.index("vc_s += pb")
+    x = np.array([0.0, 0.5 * DX, DX, 0.0])
+    y = np.array([0.0, 0.0, 0.0, 0.6 * DX])
+    kind = np.array([WALL, WALL, FLUID, FLUID])
+    sim = _sim(pipe, x, y, np.zeros(4), np.zeros(4), np.full(4, RHO0), kind)
+    st = sim.state
+    order = np.argsort(st.id)
+    p = st.p[order]
+    # wall 0 sees both fluid particles, wall 1 sees both; fluid keep the EOS's p = 0
+    assert list(p) == [2.0, 2.0, 0.0, 0.0]
+    s = sim.aux[pipe.aux_index("vc_s")][order]
+    assert s[2] == pytest.approx(4.0) and s[0] == pytest.approx(2.0)
