@@ -215,14 +215,18 @@ def test_wall_velocity_is_no_slip_or_free_slip(adami_pipe, noslip):
     assert (st.u[st.kind == WALL] == 0.0).all() and (st.v[st.kind == WALL] == 0.0).all()
 
 
-def test_hydrostatic_tank_at_rest_with_adami_walls_and_the_riemann_scheme(tutorial):
-    """The hydrostatic tank (H/dx = 10, 0.8 s) with ``adami`` walls and both Riemann
-    halves: nobody in a wall, bed pressure (as in tests/test_boundaries.py) within 3 % of
-    rho g H, mean vertical velocity below 5 mm/s at the end."""
+@pytest.mark.parametrize("boundary", ["adami", "stationaryGhosts"])
+def test_hydrostatic_tank_at_rest_with_the_riemann_scheme(tutorial, boundary):
+    """The hydrostatic tank (H/dx = 10, 0.8 s) with both Riemann halves, over ``adami``
+    walls and over stationary ghosts (whose pairs take ZHA17's hydrostatic right state in
+    the density dissipation; with their own pressure instead the column sank by dx/2):
+    nobody in a wall, bed pressure (as in tests/test_boundaries.py) within 2 % of rho g H
+    (0.8 % and 0.6 % measured), mean vertical velocity below 4 mm/s (1.9 and 2.0 mm/s:
+    the free surface's one-sided dissipation swells the top rows slowly)."""
     from sphfoam.sampling.hydrostatic import bed_pressure
 
     dx, Hw, W = 0.04, 0.4, 0.5
-    case = tutorial("hydrostaticTank", {"constant/sphProperties:boundary.type": "adami",
+    case = tutorial("hydrostaticTank", {"constant/sphProperties:boundary.type": boundary,
                                         "constant/sphProperties:momentum.type": "riemann",
                                         "constant/sphProperties:continuity.type": "riemann",
                                         "system/particleDict:dx": dx,
@@ -239,8 +243,8 @@ def test_hydrostatic_tank_at_rest_with_adami_walls_and_the_riemann_scheme(tutori
         x, y = s["positions"][f].T
         assert x.min() > 0 and x.max() < W and y.min() > 0, f"a particle in a wall at t={t}"
     bed = bed_pressure(x, y, s["p"][f], x0=0.0, width=W, depth=Hw, reach=3.25 * dx, dx=dx)[0]
-    assert bed == pytest.approx(RHO0 * G * Hw, rel=0.03)
-    assert abs(s["U"][f][:, 1].mean()) < 0.005
+    assert bed == pytest.approx(RHO0 * G * Hw, rel=0.02)
+    assert abs(s["U"][f][:, 1].mean()) < 0.004
     w = s["type"] == WALL
     assert (s["U"][w] == 0.0).all()                 # written with the prescribed velocity
 

@@ -53,16 +53,32 @@ class RiemannContinuity(Continuity):
     density-weighted form T(3.17) plus the solver's dissipation
     -2 rho_a sum_b m_b/rho_b (p_a - p_b)/(2 rho_bar c_bar) e_ab . grad_a W_ab: a particle
     of higher pressure than its neighbours loses density. (ZHA17 limit only P*; U* keeps its
-    acoustic form.)
+    acoustic form.) Across a wall particle b (any neighbour that is not fluid: wet walls,
+    ``adami`` walls, mirror ghosts) the right state's pressure is the hydrostatic
+    continuation of a's, p_R = p_a + rho_a g . (r_b - r_a) (ZHA17's fluid-wall Riemann
+    problem), so a fluid at rest over a wall neither drains into it nor swells from it.
+    The dissipation acts for fluid particles a; wet walls' density evolves by the
+    density-weighted part alone.
     """
 
     name = "riemann"
     doc = ("drho_a/dt = 2 rho_a sum_b m_b/rho_b (v_a - v*) . grad_a W_ab with U* of the "
            "linearised Riemann solver, Zhang, Hu & Adams (2017, JCP 340)")
-    drho_code = _PAIR_STATE + """\
-rs_ds = (pa - pb) / (2.0 * rs_rho * rs_c * rs_r)
-drho_a += 2.0 * rhoa * mb / rhob * ((0.5 * uc_ab + rs_ds * dx_ab) * gWx
-                                    + (0.5 * vc_ab + rs_ds * dy_ab) * gWy)"""
+    drho_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
+    #: -2 rho_a m_b/rho_b (U* - (U_L + U_R)/2) e_ab . grad_a W_ab, e_ab = -r_ab / |r_ab|
+    dissipation_code = _PAIR_STATE + """\
+if kindb == FLUID:
+    rs_dp = pa - pb
+else:
+    rs_dp = rhoa * (gx * dx_ab + gy * dy_ab)      # p_a - p_R
+rs_ds = rs_dp / (rs_rho * rs_c * rs_r)
+drho_a += rhoa * mb / rhob * rs_ds * (dx_ab * gWx + dy_ab * gWy)"""
+
+    def terms(self):
+        return [*super().terms(),
+                Term("riemannDissipation", ("rates", "density"), pair=self.dissipation_code,
+                     applies=("fluid",), reads=("gradW",),
+                     writes=("drho",))]
 
 
 @register
