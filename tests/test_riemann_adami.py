@@ -333,3 +333,42 @@ def test_a_wall_prepass_sets_the_state_before_the_other_prepass_terms_read_it():
     assert list(p) == [2.0, 2.0, 0.0, 0.0]
     s = sim.aux[pipe.aux_index("vc_s")][order]
     assert s[2] == pytest.approx(4.0) and s[0] == pytest.approx(2.0)
+
+
+class _WetMark(PipelineModel):
+    """Test model: a prepass term for wet walls only."""
+
+    family = "velocityCorrection"
+    name = "testWetMark"
+    doc = "test model"
+    prefix = "vc_"
+
+    def terms(self):
+        return [T.Term("wet", ("prepass",), init="vc_n = 0.0", pair="vc_n += 1.0",
+                       final="aux[I_vc_n, a] = vc_n", applies=("wetWall",), sees=("fluid",),
+                       writes=("aux.vc_n",))]
+
+
+def test_a_prepass_for_wet_walls_runs_where_they_are_wet_and_needs_them_defined():
+    from sphfoam.engine.codegen import generate_source
+
+    def src(boundary):
+        sel = Selection(*(registry.build(f, {"type": t}) for f, t in (
+            ("kernel", "quartic"), ("equationOfState", "tait"),
+            ("continuity", "differenceForm"), ("momentum", "symmetric"),
+            ("viscosity", "none"), ("boundary", boundary))))
+        sel.velocityCorrection = _WetMark()
+        ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=(0.0, -G), fluid_height=0.1,
+                          c0=C0)
+        names = ["h", "inv_h", "support2", "eta2", "gx", "gy"] + [
+            k for m in sel.models() for k in m.params(ctx)]
+        return generate_source(sel, names)
+
+    hyb = src("hybrid")
+    pre = hyb[hyb.index("def prepass"):hyb.index("def rates")]
+    branch = pre.index("if kind[a] == FLUID:")
+    wall = pre[pre.index("else:", branch):]
+    assert "if aux[I_bnd_wet, a] > 0.5:" in wall and "vc_n += 1.0" in wall
+    assert "vc_n += 1.0" not in pre[:pre.index("else:", branch)]   # not for fluid particles
+    with pytest.raises(T.ContractError, match="testWetMark.*wet walls"):
+        src("adami")
