@@ -18,13 +18,15 @@ Fluid particles then see the wall particles as neighbours of kind ``ghost``: eve
 velocity. (AHA12 use the extrapolated velocity in the viscous term only and the prescribed
 one in the continuity equation; here every term sees one velocity, whose normal component
 is the mirror image of the fluid's as for ``mirrorGhosts``, T(3.78).) The prescribed wall
-velocity is put back on the wall particles before each evaluation and after each step (a
-run-time hook), so written fields show it. The wall acceleration a_w of eq. (27) is taken
+velocity (the wall particle's velocity as set up, e.g. a sliding wall's constant
+``velocity``, or its wall entry's motion) is put back on the wall particles before each
+evaluation and after each step (a run-time hook), so written fields show it. The wall acceleration a_w of eq. (27) is taken
 as zero: exact for fixed walls, an approximation for moving ones.
 """
 
 from __future__ import annotations
 
+import numpy as np
 from pydantic import Field
 
 from sphfoam.engine.state import WALL
@@ -111,22 +113,31 @@ class Adami(Boundary):
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
     def attach(self, sim):
+        """Record each wall particle's velocity as set up (zero, or a wall entry's constant
+        ``velocity``), by particle id: the prescribed velocity of walls without a motion."""
+        st = sim.state
+        wall = st.kind == WALL
+        n_id = int(st.id[wall].max()) + 1 if wall.any() else 0
+        self._u0 = np.zeros(n_id)
+        self._v0 = np.zeros(n_id)
+        self._u0[st.id[wall]] = st.u[wall]
+        self._v0[st.id[wall]] = st.v[wall]
         self._velocities = {}
 
     def walls_moved(self, sim, offsets, velocities):
         self._velocities = dict(velocities)
 
     def _prescribed_velocity(self, sim):
-        """Put the prescribed velocity back on every wall particle (zero, or its wall
+        """Put the prescribed velocity back on every wall particle (as set up, or its wall
         entry's motion): the prepass overwrote it with the extrapolated one."""
         st = sim.state
         wall = st.kind == WALL
-        st.u[wall] = 0.0
-        st.v[wall] = 0.0
-        vel = getattr(self, "_velocities", None)
-        if vel and "patch" in st.extra:
+        ids = st.id[wall]
+        st.u[wall] = self._u0[ids]
+        st.v[wall] = self._v0[ids]
+        if self._velocities and "patch" in st.extra:
             patch = st.extra["patch"]
-            for which, (uu, vv) in vel.items():
+            for which, (uu, vv) in self._velocities.items():
                 on = wall & (patch == float(which))
                 st.u[on] = uu
                 st.v[on] = vv
