@@ -18,11 +18,11 @@ equations:
                 v*_ab = U* e_ab + ((v_a + v_b)/2 - (U_L + U_R)/2 e_ab)
     dv_a/dt   = -2 sum_b m_b P* / (rho_a rho_b) grad_a W_ab
 
-Both are pair-antisymmetric (momentum is conserved to round-off). The two halves are separate
-models, ``continuity riemann`` and ``momentum riemann``; ZHA17's scheme is both selected, and
-each also works beside the other family's classical forms. With the continuity velocity
-uc_ab (``uc``; v_ab unless XSPH corrects it), v_a - v*_ab = uc_ab / 2 - (U* - (U_L + U_R)/2)
-e_ab.
+The momentum equation is pair-antisymmetric (momentum is conserved to round-off). The two
+halves are separate models, ``continuity riemann`` and ``momentum riemann``; ZHA17's scheme is
+both selected, and each also works beside the other family's classical forms. With the
+continuity velocity uc_ab (``uc``; v_ab unless XSPH corrects it),
+v_a - v*_ab = uc_ab / 2 - (U* - (U_L + U_R)/2) e_ab.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class RiemannContinuity(Continuity):
     drho_a/dt = 2 rho_a sum_b m_b/rho_b (v_a - v*_ab) . grad_a W_ab, which is the
     density-weighted form T(3.17) plus the solver's dissipation
     -2 rho_a sum_b m_b/rho_b (p_a - p_b)/(2 rho_bar c_bar) e_ab . grad_a W_ab: a particle
-    of higher pressure than its neighbours loses density. (ZHA17 limit only P*; U* keeps its
+    of higher pressure than its neighbours loses density. (Only P* is limited; U* keeps its
     acoustic form.) Across a wall particle b (any neighbour that is not fluid: wet walls,
     ``adami`` walls, mirror ghosts) the right state's pressure is the hydrostatic
     continuation of a's, p_R = p_a + rho_a g . (r_b - r_a) (ZHA17's fluid-wall Riemann
