@@ -303,7 +303,7 @@ def test_mirror_ghosts_conserve_a_particle_moving_along_a_free_slip_wall(mirror)
 # whole runs: tank at rest, dam break, piston paddle, particles leaving the domain
 # ============================================================================================
 BOUNDARIES = ["stationaryGhosts", "repulsiveMonaghanKos", "repulsiveMonaghan2003",
-              "mirrorGhosts", "hybrid"]
+              "mirrorGhosts", "hybrid", "adami"]
 
 
 @pytest.mark.parametrize("boundary", BOUNDARIES)

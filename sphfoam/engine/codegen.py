@@ -277,8 +277,8 @@ class Assembly:
         """Pair code of ``terms`` for one neighbour b: the definers and correctors of pair
         quantities first, for every neighbour, then the others by neighbour kind."""
         terms = self.needed(terms)
-        pre = [t for t in terms if t.on_demand or t.corrects]
-        rest = [t for t in terms if not (t.on_demand or t.corrects)]
+        pre = [t for t in terms if t.on_demand or set(t.corrects) & T.PAIR_QUANTITIES]
+        rest = [t for t in terms if t not in pre]
         pre_code = [expand_components(t.pair) for t in pre if t.pair]
         code = _NEIGHBOUR_LOAD + "\n".join(x for x in pre_code if x)
         disp = self._dispatch(rest)
@@ -377,6 +377,43 @@ class Assembly:
                                      self.pair_loop(terms, sigma),
                                      self.particle_code(terms, "final")) if x)
 
+    def prepass_loops(self) -> list[str]:
+        """The body of each prange loop of the prepass, in order: first the terms that set
+        a particle's state in place (``p``, ``c``, ``rho``, ``u``), so every other term
+        reads the value they set and none reads it while it is written; then the others.
+        Terms that apply to every particle run unbranched; otherwise fluid and wall
+        particles each run the terms that apply to them."""
+        pre = [t for t in self.terms if "prepass" in t.stages]
+        state = [t for t in pre if not t.on_demand and
+                 (set(t.writes) | set(t.corrects)) & set(T.STATE_QUANTITIES)]
+        rest = [t for t in pre if t not in state]
+        if state:
+            state = [t for t in pre if t.on_demand] + state
+        return [self._prepass_body(ts) for ts in (state, rest)
+                if [t for t in ts if not t.on_demand]]
+
+    def _prepass_body(self, ts: list) -> str:
+        if all("all" in t.applies for t in ts):
+            return self.gather(ts)
+        fluid = [t for t in ts if {"all", "fluid"} & set(t.applies)]
+        wall = [t for t in ts if {"all", "wall"} & set(t.applies)]
+        wet = [t for t in ts if "wetWall" in t.applies and not {"all", "wall"} & set(t.applies)]
+        out = "if kind[a] == FLUID:\n" + _indent(self._gather_or_pass(fluid))
+        wall_code = self._gather_or_pass(wall)
+        if [t for t in wet if not t.on_demand]:
+            if "wetWall" not in self.kinds:
+                t = next(t for t in wet if not t.on_demand)
+                raise T.ContractError(f"{t.who()} applies to wet walls, which the selected "
+                                      "boundary does not define")
+            wet_code = self.gather([t for t in ts if t.on_demand] + wet)
+            if self.kinds["wetWall"] != "else":
+                wet_code = f"if {self._cond('wetWall', 'a')}:\n" + _indent(wet_code)
+            wall_code = wet_code if wall_code == "pass" else wall_code + "\n" + wet_code
+        return out + "\nelse:\n" + _indent(wall_code)
+
+    def _gather_or_pass(self, ts: list) -> str:
+        return self.gather(ts) if [t for t in ts if not t.on_demand] else "pass"
+
     def wall_gather(self, stage: str) -> str:
         """The code of ``stage`` for a wall particle a: terms applying to wet walls, when a
         is wet ("pass" where no model defines wet walls)."""
@@ -469,16 +506,16 @@ def fill_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, n
             k += 1
 ''')
     if asm.has_stage("prepass"):
-        pre = asm.stage("prepass", "all")
+        loops = "".join(f'''
+    for a in prange(x.shape[0]):
+{_block(_PARTICLE_LOAD, 8)}
+{_block(body, 8)}''' for body in asm.prepass_loops())
         parts.append(f'''
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def prepass({_ARGS}):
     """Per-particle quantities the pair terms need: {", ".join(aux)}."""
-{_block(bind, 4)}
-    for a in prange(x.shape[0]):
-{_block(_PARTICLE_LOAD, 8)}
-{_block(asm.gather(pre), 8)}
+{_block(bind, 4)}{loops}
 ''')
     fluid_rates = asm.stage("rates", "fluid")
     parts.append(f'''

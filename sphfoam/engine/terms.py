@@ -71,7 +71,14 @@ QUANTITIES = {
     "rho": "rho[a]: the density of a, set in place (step stage)",
     "p": "p[a]: pressure (particle stage)",
     "c": "c[a]: sound speed (particle stage)",
+    "u": "u[a], v[a]: the velocity of a wall particle, set in place (prepass stage)",
 }
+#: quantities of a pair (defined and corrected per neighbour, before the terms reading them)
+PAIR_QUANTITIES = {"W", "gradW", "uc"}
+#: quantities of a particle's state a prepass term may set in place (p, c corrected after the
+#: equation of state, rho, u written): such terms run in a prepass loop of their own, before
+#: every other prepass term, so that no term reads them while they are written
+STATE_QUANTITIES = ("p", "c", "rho", "u")
 #: quantities each of which exactly one model defines (another may correct it)
 EXCLUSIVE = ("W", "gradW", "uc", "rho_new", "p", "c")
 

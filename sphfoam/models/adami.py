@@ -1,0 +1,149 @@
+"""The generalised wall boundary of Adami, Hu & Adams (2012, JCP 231, 7057-7075).
+
+Rows of wall particles behind the wall line (as for ``stationaryGhosts``) whose state is
+extrapolated from the fluid before every evaluation of the rates:
+
+* pressure, AHA12 eq. (27): p_w = (sum_f p_f W_wf + (g - a_w) . sum_f rho_f r_wf W_wf)
+  / sum_f W_wf, over the fluid neighbours f of wall particle w (r_wf = r_w - r_f); a wall
+  particle with no fluid neighbour has p_w = 0;
+* density from the inverse equation of state, rho_w = rho0 (1 + p_w / B)^(1/gamma) (Tait,
+  T(3.27));
+* velocity from the Shepard average of the fluid's, u~_f = sum_f u_f W_wf / sum_f W_wf,
+  mirrored about the prescribed wall velocity U_w: no slip, u_w = 2 U_w - u~_f (AHA12
+  eq. (22)); free slip, the fluid's tangential velocity u~_f,t with the normal component
+  mirrored, 2 U_w,n - u~_f,n (at a corner particle, with no single normal, the no-slip form).
+
+Fluid particles then see the wall particles as neighbours of kind ``ghost``: every term
+(continuity, momentum, viscosity) treats them as fluid with the extrapolated p, rho and
+velocity. (AHA12 use the extrapolated velocity in the viscous term only and the prescribed
+one in the continuity equation; here every term sees one velocity, whose normal component
+is the mirror image of the fluid's as for ``mirrorGhosts``, T(3.78).) The prescribed wall
+velocity (the wall particle's velocity as set up, e.g. a sliding wall's constant
+``velocity``, or its wall entry's motion) is put back on the wall particles before each
+evaluation and after each step (a run-time hook), so written fields show it. The wall acceleration a_w of eq. (27) is taken
+as zero: exact for fixed walls, an approximation for moving ones.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydantic import Field
+
+from sphfoam.engine.state import WALL
+from sphfoam.engine.terms import Term
+from sphfoam.models.base import CaseContext
+from sphfoam.models.boundaries import Boundary
+from sphfoam.registry import Coeffs, register
+
+_INIT = """\
+bnd_sw = 0.0
+bnd_sp = 0.0
+bnd_su = 0.0
+bnd_sv = 0.0
+"""
+
+#: over fluid neighbours f of wall particle a: AHA12 eq. (27) with a_w = 0 and the Shepard sums
+_PAIR = """\
+bnd_sw += Wab
+bnd_sp += (pb + rhob * (gx * dx_ab + gy * dy_ab)) * Wab
+bnd_su += (ua - u_ab) * Wab
+bnd_sv += (va - v_ab) * Wab
+"""
+
+_FINAL = """\
+if bnd_sw > 0.0:
+    bnd_pw = bnd_sp / bnd_sw
+    bnd_uf = bnd_su / bnd_sw
+    bnd_vf = bnd_sv / bnd_sw
+else:
+    bnd_pw = 0.0
+    bnd_uf = ua
+    bnd_vf = va
+p[a] = bnd_pw
+rho[a] = eos_rho0 * max(1.0 + bnd_pw / eos_B, 1e-6) ** (1.0 / eos_gamma)
+"""
+
+_NO_SLIP = """\
+u[a] = 2.0 * ua - bnd_uf
+v[a] = 2.0 * va - bnd_vf
+"""
+
+_FREE_SLIP = """\
+if fld[F_corner, a] > 0.5:
+    u[a] = 2.0 * ua - bnd_uf
+    v[a] = 2.0 * va - bnd_vf
+else:
+    bnd_nx = fld[F_nx, a]
+    bnd_ny = fld[F_ny, a]
+    bnd_dn = (ua - bnd_uf) * bnd_nx + (va - bnd_vf) * bnd_ny
+    u[a] = bnd_uf + 2.0 * bnd_dn * bnd_nx
+    v[a] = bnd_vf + 2.0 * bnd_dn * bnd_ny
+"""
+
+
+@register
+class Adami(Boundary):
+    """Wall particles with pressure, density and velocity extrapolated from the fluid
+    (see the module docstring)."""
+
+    name = "adami"
+    doc = ("wall-particle rows with p extrapolated from the fluid, Adami, Hu & Adams (2012) "
+           "eq. (27), rho by the inverse EOS, no-slip u_w = 2 U_w - u~_f (eq. 22) or free slip")
+    wall_fields = ("nx", "ny", "corner")
+
+    class Coeffs(Coeffs):
+        noSlip: bool = Field(True, description="no slip: u_w = 2 U_w - u~_f, AHA12 eq. (22); "
+                             "no: free slip (the fluid's tangential velocity)")
+
+    def params(self, ctx: CaseContext):
+        return {}
+
+    def neighbour_kinds(self):
+        """Every wall particle is a ghost: fluid to every term, with its extrapolated
+        state; its own density and velocity do not evolve."""
+        return {"ghost": "else"}
+
+    def terms(self):
+        slip = _NO_SLIP if self.coeffs.noSlip else _FREE_SLIP
+        reads = ("W",) if self.coeffs.noSlip else ("W", "field.nx", "field.ny",
+                                                    "field.corner")
+        return [Term("wallState", ("prepass",), init=_INIT, pair=_PAIR, final=_FINAL + slip,
+                     applies=("wall",), sees=("fluid",), reads=reads,
+                     writes=("rho", "u"), corrects=("p",))]
+
+    # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
+    def attach(self, sim):
+        """Record each wall particle's velocity as set up (zero, or a wall entry's constant
+        ``velocity``), by particle id: the prescribed velocity of walls without a motion."""
+        st = sim.state
+        wall = st.kind == WALL
+        n_id = int(st.id[wall].max()) + 1 if wall.any() else 0
+        self._u0 = np.zeros(n_id)
+        self._v0 = np.zeros(n_id)
+        self._u0[st.id[wall]] = st.u[wall]
+        self._v0[st.id[wall]] = st.v[wall]
+        self._velocities = {}
+
+    def walls_moved(self, sim, offsets, velocities):
+        self._velocities = dict(velocities)
+
+    def _prescribed_velocity(self, sim):
+        """Put the prescribed velocity back on every wall particle (as set up, or its wall
+        entry's motion): the prepass overwrote it with the extrapolated one."""
+        st = sim.state
+        wall = st.kind == WALL
+        ids = st.id[wall]
+        st.u[wall] = self._u0[ids]
+        st.v[wall] = self._v0[ids]
+        if self._velocities and "patch" in st.extra:
+            patch = st.extra["patch"]
+            for which, (uu, vv) in self._velocities.items():
+                on = wall & (patch == float(which))
+                st.u[on] = uu
+                st.v[on] = vv
+
+    def before_evaluation(self, sim):
+        self._prescribed_velocity(sim)
+
+    def after_step(self, sim):
+        self._prescribed_velocity(sim)
