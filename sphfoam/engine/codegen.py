@@ -611,8 +611,8 @@ def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0), domain_hi=(1.0, 1
     axes, the periods: the single source of these for the pipeline, set-up, sampling and
     benchmarks (all from the selected kernel and the case context)."""
     h = ctx.h
-    support = sel.kernel.support * h
-    core = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=0.01 * h * h,
+    support = ctx.support or sel.kernel.support_radius(h)   # the case context's, if set
+    core = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=ctx.eta2,
                 gx=ctx.g[0], gy=ctx.g[1])
     if sel.periodic_x:
         core["lx"] = float(domain_hi[0] - domain_lo[0])
