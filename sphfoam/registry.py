@@ -137,9 +137,28 @@ def _load_models() -> None:
     _loaded = True
 
 
+def _ordered(family: str) -> dict[str, type[Model]]:
+    """The family's models in a fixed order, whatever order their modules were imported
+    in: by module (the order of :data:`MODEL_MODULES`; others after), then by their place
+    in the module's source."""
+    import inspect
+
+    def key(item):
+        cls = item[1]
+        mod = cls.__module__
+        rank = MODEL_MODULES.index(mod) if mod in MODEL_MODULES else len(MODEL_MODULES)
+        try:
+            line = inspect.getsourcelines(cls)[1]
+        except (OSError, TypeError):
+            line = 0
+        return rank, mod, line
+
+    return dict(sorted(_REGISTRY[family].items(), key=key))
+
+
 def names(family: str) -> list[str]:
     _load_models()
-    return list(_REGISTRY[family])
+    return list(_ordered(family))
 
 
 def get(family: str, name: str) -> type[Model]:
@@ -152,7 +171,7 @@ def get(family: str, name: str) -> type[Model]:
 
 def families() -> dict[str, dict[str, type[Model]]]:
     _load_models()
-    return {f: dict(models) for f, models in _REGISTRY.items()}
+    return {f: _ordered(f) for f in _REGISTRY}
 
 
 def build(family: str, spec: dict[str, Any]) -> Model:
