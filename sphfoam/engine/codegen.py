@@ -198,7 +198,7 @@ class Assembly:
         viscous_dry = False
         for m in self.models:
             for k, cond in m.neighbour_kinds().items():
-                if k == "noSlipWall":
+                if k == "viscousWall":
                     viscous_dry = bool(cond)
                     continue
                 if k not in T.NEIGHBOUR_KINDS or k == "fluid":
@@ -234,7 +234,7 @@ class Assembly:
     def sees(self, t) -> set[str]:
         out = set()
         for s in t.sees:
-            if s == "noSlipWall":
+            if s == "viscousWall":
                 if self.viscous_dry_walls and "dryWall" in self.kinds:
                     out.add("dryWall")
             elif s == "all" or s in self.kinds:

@@ -51,9 +51,9 @@ LOOP_STAGES = ("step", "prepass", "rates", "density", "filter")
 #: a neighbour of no kind is seen only by terms that see ``all``
 NEIGHBOUR_KINDS = ("fluid", "ghost", "wetWall", "dryWall")
 #: what a term may name in ``sees``: the kinds above, ``all`` (every neighbour, whatever its
-#: kind) and ``noSlipWall`` (the dry walls that enter viscous terms: those of a no-slip
+#: kind) and ``viscousWall`` (the dry walls that enter viscous terms: those of a no-slip
 #: boundary, none of a free-slip one)
-SEES = (*NEIGHBOUR_KINDS, "noSlipWall", "all")
+SEES = (*NEIGHBOUR_KINDS, "viscousWall", "all")
 #: kinds of particle a a term may apply to: ``fluid``, ``wall`` (any wall particle),
 #: ``wetWall`` (a wall particle the boundary treats as fluid), ``all``
 PARTICLE_KINDS = ("fluid", "wall", "wetWall", "all")
@@ -194,8 +194,8 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
             elif r not in QUANTITIES:
                 raise ContractError(f"{t.who()} reads {r!r}: not a quantity "
                                     f"({', '.join(QUANTITIES)}), aux.<name> or field.<name>")
-        if "noSlipWall" in t.sees and "dryWall" in t.sees:
-            raise ContractError(f"{t.who()} sees both dryWall and noSlipWall")
+        if "viscousWall" in t.sees and "dryWall" in t.sees:
+            raise ContractError(f"{t.who()} sees both dryWall and viscousWall")
     del kinds_defined
 
 

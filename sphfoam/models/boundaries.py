@@ -142,7 +142,7 @@ class _Repulsive(Boundary):
 
     def neighbour_kinds(self):
         """Every wall particle is dry: it pushes (``force_code``) and, no-slip, rubs."""
-        return {"dryWall": "else", "noSlipWall": self.coeffs.noSlip}
+        return {"dryWall": "else", "viscousWall": self.coeffs.noSlip}
 
     def terms(self):
         return [Term("wallForce", ("rates",), pair=self.force_code, sees=("dryWall",),
@@ -346,7 +346,7 @@ else:
         than dx to the wall) push and, no-slip, rub; deeper dry rows are ignored."""
         return {"wetWall": "aux[I_bnd_wet, {i}] > 0.5",
                 "dryWall": "fld[F_wallDist, {i}] < bnd_dx",
-                "noSlipWall": self.coeffs.noSlip}
+                "viscousWall": self.coeffs.noSlip}
 
     def terms(self):
         return [Term("wetDry", ("step",), applies=("wall",), sees=("fluid",),

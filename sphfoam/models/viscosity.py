@@ -13,7 +13,7 @@ from sphfoam.registry import Coeffs, register
 
 
 #: viscous terms see fluid, ghosts, wet walls and, at a no-slip boundary, dry walls
-VISCOUS_SEES = ("fluid", "ghost", "wetWall", "noSlipWall")
+VISCOUS_SEES = ("fluid", "ghost", "wetWall", "viscousWall")
 
 
 class Viscosity(PipelineModel):
