@@ -97,14 +97,7 @@ def _check_metrics(mset, case: Case) -> None:
         functions = case.control.functions
     except CaseError:
         return                                  # reported by validate already
-    problems = []
-    for m in mset.metrics.values():
-        try:
-            m.check(functions)
-        except CaseError as e:
-            problems.extend(e.problems)
-    if problems:
-        raise CaseError(problems)
+    mset.check(case.path, functions)
 
 
 def validate_runs(study) -> None:

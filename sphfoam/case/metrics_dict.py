@@ -50,10 +50,12 @@ class MetricSet:
     pareto: str | None
     source: str = METRICS_DICT
 
-    def check(self, case_path) -> None:
+    def check(self, case_path, functions: dict | None = None) -> None:
         """Check every metric against the function objects of the case's system/controlDict
-        (before a run: nothing is read from postProcessing)."""
-        functions = Case(case_path).read_dict(CONTROL_DICT).get("functions") or {}
+        (or ``functions``, already read; before a run: nothing is read from
+        postProcessing)."""
+        if functions is None:
+            functions = Case(case_path).read_dict(CONTROL_DICT).get("functions") or {}
         problems: list[Problem] = []
         for m in self.metrics.values():
             try:
