@@ -25,6 +25,7 @@ ANGLE = 5.0
 TOE = 0.4             # x of the toe of the slope
 D = 0.1               # still-water depth over the flat bed
 END = 1.6             # x of the end of the beach (the shoreline is at TOE + D / tan 5 = 1.543)
+SHORE = 1.5430052
 
 #: a tiny flume with a 5 degree beach: the syntax tutorials/solitaryBeach copies
 SLOPE_PARTICLE_DICT = """\
@@ -44,7 +45,7 @@ fluid
     beach                       // over the slope: rows parallel to it, the first dx/2 above
     {
         type    polygon;
-        points  ((0.4 0) (1.6 0.1049863962) (1.6 0.1) (0.4 0.1));
+        points  ((0.4 0) (1.5430052 0.1) (0.4 0.1));    // up to the shoreline
         grid    { origin (0.4 0); angle 5; }
     }
 }
@@ -150,6 +151,28 @@ def test_slope_layout(tmp_path, boundary):
     # particle of its column (the rotated rows' tops lie anywhere in the last dx: within dx/2)
     p = case.models.sph["equationOfState"].pressure(state.rho[f], case.context)
     assert np.max(np.abs(p - 1000 * 9.81 * (D - state.y[f]))) <= 1000 * 9.81 * 0.5 * DX * 1.01
+
+
+def test_a_box_clipped_to_the_walls_fills_the_beach_as_the_polygon(tmp_path):
+    """clipToWalls: a box over the whole beach, on the rotated grid, keeps only the particles
+    above the slope: the same as the polygon up to the shoreline."""
+    poly = setup_case(Case(slope_case(tmp_path / "a")), log=lambda m: None)
+    text = SLOPE_PARTICLE_DICT.replace(
+        "type    polygon;\n        points  ((0.4 0) (1.5430052 0.1) (0.4 0.1));    // up to the "
+        "shoreline", "type    box;\n        min     (0.4 0);\n        max     (1.6 0.1);\n"
+        "        clipToWalls yes;")
+    assert "clipToWalls" in text
+    box = setup_case(Case(slope_case(tmp_path / "b", text)), log=lambda m: None)
+    a = np.unique(np.round(np.column_stack([poly.x, poly.y])[poly.kind == 0] / DX, 6), axis=0)
+    b = np.unique(np.round(np.column_stack([box.x, box.y])[box.kind == 0] / DX, 6), axis=0)
+    assert len(a) == np.count_nonzero(poly.kind == 0)
+    np.testing.assert_array_equal(a, b)
+    # without clipping the box fills the solid under the slope too
+    unclipped = setup_case(Case(slope_case(tmp_path / "c", text.replace(
+        "clipToWalls yes;", "clipToWalls no;"))), log=lambda m: None)
+    uf = unclipped.kind == 0
+    assert np.count_nonzero(_rotated(unclipped.x[uf], unclipped.y[uf])[1] < 0) > 10
+    assert np.all(_rotated(box.x[box.kind == 0], box.y[box.kind == 0])[1] > 0)
 
 
 def test_seam_thinning(tmp_path):

@@ -241,6 +241,10 @@ class Grid(Strict):
         return v
 
 
+_CLIP_DOC = ("yes: fill only the part of the region on the fluid side of the walls (at least "
+             "dx/2 from them), e.g. a box over a beach filled above the slope; no: the whole "
+             "region (fluid closer than dx/2 to a wall is dropped either way)")
+
 _GRID_DOC = ("{ origin (x y); angle a; }: fill the region on a lattice rotated by a degrees "
              "and anchored at origin (particles above a slope, T §5.3.4); default: the usual "
              "grid anchored at the region's lower-left corner")
@@ -251,6 +255,7 @@ class BoxRegion(Strict):
     min: Vector2
     max: Vector2
     grid: Grid | None = Field(None, description=_GRID_DOC)
+    clipToWalls: bool = Field(False, description=_CLIP_DOC)
 
     @model_validator(mode="after")
     def _order(self):
@@ -263,6 +268,7 @@ class PolygonRegion(Strict):
     type: Literal["polygon"]
     points: list[Vector2] = Field(min_length=3)
     grid: Grid | None = Field(None, description=_GRID_DOC)
+    clipToWalls: bool = Field(False, description=_CLIP_DOC)
 
 
 FluidRegion = Annotated[BoxRegion | PolygonRegion, Field(discriminator="type")]
