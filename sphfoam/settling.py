@@ -92,6 +92,7 @@ def settle(case, state: ParticleState, log=print) -> tuple[ParticleState, int, f
     monitor.start(sim)
     steps = 0
     eps = 1e-9 * t_end
+    tenth = 1                            # a log line every tenth of the settling time
     while sim.time < t_end - eps:
         remaining = t_end - sim.time
         dt = sim.step(remaining)
@@ -99,6 +100,11 @@ def settle(case, state: ParticleState, log=print) -> tuple[ParticleState, int, f
         if landed:
             sim.time = t_end
         steps += 1
+        if sim.time >= tenth * t_end / 10 - eps or sim.time >= t_end - eps:
+            log(f"settling: time {sim.time:.6g} of {t_end:g} s (step {steps}, dt {dt:.4g}, "
+                f"KE {sim.kinetic_energy():.4g} J/m)")
+            while tenth * t_end / 10 - eps <= sim.time:
+                tenth += 1
         diagnosis = monitor.check(sim, dt, landed)
         if diagnosis is not None:
             raise CaseError.single(

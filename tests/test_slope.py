@@ -335,6 +335,7 @@ def test_run_without_0_settles_first_then_the_paddle_moves(tmp_path):
     run_case(case, progress=False, echo=None, end_time=0.01)
     log = (case / "log.sphfoam").read_text()
     assert "settling for 0.02 s" in log and "settled in" in log
+    assert log.count("settling: time ") == 10 and "settling: time 0.02 of 0.02 s" in log
     raw, start = _fields(case / "0.unsettled"), _fields(case / "0")
     end = _fields(case / "0.01")
     paddle = (raw["type"] != 0) & (raw["positions"][:, 0] < 0) & (raw["positions"][:, 1] > 0)
