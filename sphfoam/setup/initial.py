@@ -25,7 +25,8 @@ def _setup(case: Case, log) -> ParticleState:
     state = generate(case.particles, case.context, eos, boundary=sph["boundary"],
                      support_radius=case.context.support,
                      moving=bool(case.models.motions),
-                     waves=list(case.waves.values()))
+                     waves=list(case.waves.values()),
+                     fields=[f for m in sph.values() for f in getattr(m, "particle_fields", ())])
     sim_p = eos.pressure(state.rho, case.context)
     write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
     # the one-cell mesh and CASE.foam that ParaView's OpenFOAM reader needs
