@@ -247,8 +247,11 @@ def test_bad_coefficients(spec, words):
 def test_roughness_larger_than_the_law_allows():
     mdl = registry.build("turbulence", {"type": "smagorinskySPS", "wallLaw": "rough",
                                         "ks": 0.1})
-    with pytest.raises(ValueError, match="too large"):
+    with pytest.raises(CaseError) as e:
         mdl.params(CTX)
+    assert "constant/sphProperties: turbulence.ks: 0.1 m is too large" in str(e.value)
+    # the bound, ln(delta/ks)/0.41 + 8.5 = 1: ks = 1 mm e^(0.41 * 7.5) = 1 mm e^3.075 = 21.65 mm
+    assert "ks < 0.0216 m" in str(e.value)
 
 
 @pytest.fixture

@@ -16,6 +16,7 @@ from sphfoam.models import walllaw as wl
 from sphfoam.models.base import PipelineModel
 from sphfoam.models.viscosity import velocity_gradient_term
 from sphfoam import registry
+from sphfoam.case.errors import CaseError
 from sphfoam.registry import Coeffs, register
 
 
@@ -160,10 +161,12 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
         if c.wallLaw == "smooth":
             out["turb_wlnu"] = ctx.nu
         elif c.wallLaw == "rough":
-            if math.log(delta / c.ks) / wl.KAPPA + wl.B_ROUGH <= 0.0:
-                raise ValueError(f"turbulence.ks = {c.ks:g} m is too large for delta = "
-                                 f"{delta:g} m: T(3.85) needs ln(delta/ks)/0.41 + 8.5 > 0, "
-                                 f"ks < {delta / math.exp(-wl.KAPPA * wl.B_ROUGH):g} m")
+            if math.log(delta / c.ks) / wl.KAPPA + wl.B_ROUGH <= 1.0:
+                raise CaseError.single(
+                    "constant/sphProperties", "turbulence.ks",
+                    f"{c.ks:g} m is too large for delta = {delta:g} m (wallDelta dx): T(3.85) "
+                    f"needs ln(delta/ks)/0.41 + 8.5 > 1, ks < "
+                    f"{delta / math.exp(wl.KAPPA * (1.0 - wl.B_ROUGH)):.3g} m")
             out["turb_wlks"] = c.ks
         else:
             out["turb_wluplus"] = c.UPlus
