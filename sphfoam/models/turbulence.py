@@ -11,12 +11,12 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from sphfoam import registry
+from sphfoam.case.errors import CaseError
 from sphfoam.engine.terms import Term
 from sphfoam.models import walllaw as wl
 from sphfoam.models.base import PipelineModel
 from sphfoam.models.viscosity import velocity_gradient_term
-from sphfoam import registry
-from sphfoam.case.errors import CaseError
 from sphfoam.registry import Coeffs, register
 
 
@@ -47,8 +47,8 @@ class SmagorinskySPS(Turbulence):
     the law of the wall (``smooth`` T(3.84), ``rough`` T(3.85) with roughness ``ks``,
     ``prescribedUPlus`` u_t = ``UPlus`` u*, T §5.3.3) for the fluid's tangential velocity
     interpolated at the wall particle, the physical wall ``wallDelta`` dx behind the first
-    wall row; the wall particle's stress becomes the wall
-    shear stress tau/rho = u*^2 (t n + n t), which the fluid feels through the SPS divergence,
+    wall row; the wall particle's stress becomes the wall shear stress
+    tau/rho = u*^2 (t n + n t), which the fluid feels through the SPS divergence,
     a wall neighbour's stress taken for both particles of the pair, 2 tau_b/rho_b^2 (so that
     a plane wall exerts tau_w on the fluid, not the mean of tau_w and the fluid's own SPS stress).
     u* is stored in ``turb_ustar``. It needs wall particles the fluid sees as fluid (the

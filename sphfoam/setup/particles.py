@@ -94,6 +94,10 @@ def local_surface(xf, yf, dx):
     return top[col] + 0.5 * dx
 
 
+#: the per-wall-particle fields the set-up can write (sphfoam.setup.geometry.wall_metadata)
+WALL_METADATA = ("nx", "ny", "wallDist", "corner", "nFull")
+
+
 def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | None = None,
              moving: bool = False, waves=(), fields=()) -> ParticleState:
     """Particles of a case at rest in hydrostatic equilibrium.
@@ -183,7 +187,8 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     dy = np.concatenate([dyf, np.full(xw.size, dx)])
     extra = {}
     # the distance behind the wall is always written: it records how the walls were set up
-    wanted = set(getattr(boundary, "wall_fields", ())) | {"wallDist"} | set(fields)
+    wanted = set(getattr(boundary, "wall_fields", ())) | {"wallDist"} | \
+        {f for f in fields if f in WALL_METADATA}
     if wanted and xw.size:
         nx, ny, dist, corner, _ = wall_metadata(segs, xw, yw, dx)
         meta = {"nx": nx, "ny": ny, "wallDist": dist, "corner": corner}
