@@ -101,16 +101,19 @@ class Simulation:
         self.segments = list(segments)
         self._hooks = {name: sel.hooks(name) for name in
                        ("before_neighbours", "add_particles", "after_sort",
-                        "before_evaluation", "walls_moved", "after_step")}
+                        "before_evaluation", "walls_moved", "after_step", "keeps_neighbours")}
         #: the models that make the advection velocity, applied in selection order, each to
         #: the previous one's result (XSPH, then a particle shifting)
         self._advection = sel.hooks("advection_velocity")
         self._summaries = sel.hooks("summary")
         #: list radius (the cell side) minus the support: how far pairs may close in
         self.skin = self.cells.cell_size - reach
-        #: a model that adds or removes particles every step needs a new list every step
-        self.reuse_neighbours = not (self._hooks["add_particles"] or
-                                     self._hooks["before_neighbours"])
+        #: a model that adds or removes particles at the neighbour update needs a new list
+        #: every step, unless it says (``keeps_neighbours``) when the particles it added
+        #: still serve
+        changers = [m for m in sel.models() if m.implements("add_particles") or
+                    m.implements("before_neighbours")]
+        self.reuse_neighbours = all(m.implements("keeps_neighbours") for m in changers)
         for attach in sel.hooks("attach"):
             attach(self)
 
@@ -151,10 +154,10 @@ class Simulation:
         self._ref = None
 
     def _list_still_valid(self) -> bool:
-        """Whether the neighbour list of an earlier step serves this one: no particle added
-        by a model, none left the domain, and every pair now within the support is listed
-        even after this step's motion (largest displacement since the build plus 1.5 v_max
-        dt < skin / 2)."""
+        """Whether the neighbour list of an earlier step serves this one: none left the
+        domain, every pair now within the support is listed even after this step's motion
+        (largest displacement since the build plus 1.5 v_max dt < skin / 2), and every model
+        that adds particles says they still serve (``keeps_neighbours``)."""
         st = self.state
         ref = self._ref
         if ref is None or not self.reuse_neighbours or ref[0].shape[0] != st.n:
@@ -167,7 +170,9 @@ class Simulation:
         if out:
             return False
         reach = math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt
-        return reach < 0.5 * self.skin
+        if not reach < 0.5 * self.skin:
+            return False
+        return all(keeps(self) for keeps in self._hooks["keeps_neighbours"])
 
     def neighbour_update(self):
         """The neighbour list of this step: the previous one while it is valid; otherwise bin
