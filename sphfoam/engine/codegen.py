@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import os
+import re
 import sys
 import textwrap
 import time
@@ -76,6 +77,14 @@ class Selection:
     adjust_time_step: bool = True
     periodic_x: bool = False
     periodic_y: bool = False
+    #: ``sphSchemes`` ``precision``: "double", or "single" (float32 velocities, density,
+    #: pressure, aux, coefficients and pair arithmetic; positions in double)
+    precision: str = "double"
+
+    @property
+    def dtype(self):
+        """The numpy type of the working arrays and coefficients."""
+        return np.dtype(np.float32 if self.precision == "single" else np.float64)
 
     def models(self):
         return [m for m in (self.kernel, self.equationOfState, self.continuity, self.momentum,
@@ -87,7 +96,8 @@ class Selection:
     def describe(self) -> str:
         txt = ", ".join(f"{m.family}={m.name}" for m in self.models() if m.name != "none")
         per = "".join(a for a, on in (("x", self.periodic_x), ("y", self.periodic_y)) if on)
-        return txt + (f", periodic={per}" if per else "")
+        txt += f", periodic={per}" if per else ""
+        return txt + (", precision=single" if self.precision == "single" else "")
 
     def assembly(self) -> "Assembly":
         return Assembly(self)
@@ -603,7 +613,51 @@ def density_filter({_ARGS}, out_rho):
 {_block(asm.gather(filt), 12)}
         out_rho[a] = rho_new
 ''')
-    return "".join(parts)
+    src = "".join(parts)
+    if sel.precision == "single":
+        src = single_precision(src, imports)
+    elif sel.precision != "double":
+        raise ValueError(f"precision {sel.precision!r}: valid are double, single")
+    return src
+
+
+_FLOAT_LITERAL = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\d+|\.\d+)"
+                            r"(?![\w.])")
+#: functions whose loops run in the working precision (not the cell walk, which bins and
+#: measures positions in double)
+_SINGLE_FUNCS = ("equation_of_state", "prepass", "rates", "density_rate", "step_pass",
+                 "density_filter")
+
+
+def single_precision(src: str, imports) -> str:
+    """The pipeline source in single precision: in the pair and particle loops every float
+    literal becomes ``F4(literal)`` and every result of an imported jitted function (the
+    kernel) is rounded to float32, and the relative position of a pair is formed in double
+    and then rounded (``dx_ab = F4(xa - x[b])``), so that, with float32 arrays and
+    coefficients, numba keeps the arithmetic in float32 instead of promoting it to float64
+    (Python float literals are float64 to numba)."""
+    names = []
+    for line in imports:
+        if " import " in line:
+            for item in line.split(" import ", 1)[1].split(","):
+                names.append(item.split(" as ")[-1].strip())
+    calls = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\(([^()]*)\)") \
+        if names else None
+    out = []
+    blocks = re.split(r"(?m)^(?=@njit)", src)
+    for blk in blocks:
+        m = re.search(r"(?m)^def (\w+)\(", blk)
+        if m and m.group(1) in _SINGLE_FUNCS:
+            head, body = blk.split("\n", 1)[0], blk.split("\n", 1)[1]
+            body = _FLOAT_LITERAL.sub(r"F4(\1)", body)
+            if calls is not None:
+                body = calls.sub(r"F4(\1(\2))", body)
+            body = body.replace("dx_ab = xa - x[b]", "dx_ab = F4(xa - x[b])")
+            body = body.replace("dy_ab = ya - y[b]", "dy_ab = F4(ya - y[b])")
+            blk = head + "\n" + body
+        out.append(blk)
+    src = "".join(out)
+    return src.replace("\nFLUID = 0\n", "\nF4 = np.float32\nFLUID = 0\n", 1)
 
 
 def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> dict:
@@ -636,11 +690,20 @@ class Pipeline:
 
     @property
     def h(self) -> float:
+        if self.core is not None:
+            return float(self.core["h"])
         return float(self.prm[CORE_PARAMS.index("h")])
 
     @property
     def support_radius(self) -> float:
+        if self.core is not None:
+            return float(np.sqrt(self.core["support2"]))
         return float(np.sqrt(self.prm[CORE_PARAMS.index("support2")]))
+
+    @property
+    def dtype(self):
+        """The numpy type of the state arrays, ``aux`` and ``prm`` the functions take."""
+        return self.prm.dtype
 
     @property
     def equation_of_state(self):
@@ -742,7 +805,7 @@ def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
         module = importlib.util.module_from_spec(spec)
         sys.modules[modname] = module
         spec.loader.exec_module(module)
-    prm = np.array([params[k] for k in names], dtype=np.float64)
+    prm = np.array([params[k] for k in names], dtype=sel.dtype)
     t0 = time.perf_counter()
     funcs = _warm_up(module, prm)
     seconds = time.perf_counter() - t0
@@ -753,24 +816,26 @@ def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
 def _warm_up(module, prm):
     """Compile (or load from numba's cache) every function with the real argument types."""
     n = 2
-    f = np.zeros(n)
-    x = np.array([0.0, 0.5 * prm[0]])
+    dt = prm.dtype               # the working precision (positions and fields: double)
+    f = np.zeros(n, dtype=dt)
+    x = np.array([0.0, 0.5 * float(prm[0])])
+    y = np.zeros(n)
     kind = np.zeros(n, dtype=np.int64)
-    m = np.ones(n)
-    rho = np.full(n, 1000.0)
+    m = np.ones(n, dtype=dt)
+    rho = np.full(n, 1000.0, dtype=dt)
     cell_start = np.array([0, 2], dtype=np.int64)
-    aux = np.zeros((len(module.AUX), n))
+    aux = np.zeros((len(module.AUX), n), dtype=dt)
     fld = np.zeros((len(module.FIELDS), n))
     module.equation_of_state(rho, f.copy(), f.copy(), prm)
     count = np.zeros(n, dtype=np.int64)
-    grid = (x, f, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, float(prm[0]) ** 2 * 16.0)
+    grid = (x, y, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, float(prm[0]) ** 2 * 16.0)
     module.count_neighbours(*grid, count)
     # sized from the count: with periodic axes the single cell is walked 3 x 3 times, so
     # each particle finds its neighbour up to nine times (a fixed list of two overflowed)
     nb_start = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
     nb_idx = np.zeros(int(nb_start[-1]), dtype=np.int32)
     module.fill_neighbours(*grid, nb_start, nb_idx)
-    args = (x, f, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
+    args = (x, y, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
     funcs = [module.equation_of_state, module.count_neighbours, module.fill_neighbours,
              module.rates, module.density_rate]
     module.rates(*args, f.copy(), f.copy(), f.copy(), f.copy())

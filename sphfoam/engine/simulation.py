@@ -53,6 +53,10 @@ class Simulation:
         self.state = state
         self.pipeline = pipeline
         self.prm = pipeline.prm
+        #: the working precision of the pipeline (``sphSchemes`` ``precision``)
+        self.dtype = pipeline.prm.dtype
+        if state.dtype != self.dtype:
+            state.set_precision(self.dtype)
         self.integrator = integrator
         #: the smoothing length and support radius are the pipeline's (one source of truth);
         #: ``h`` and ``support`` (in units of h), when given, must agree with them
@@ -87,7 +91,7 @@ class Simulation:
         self.step_index = 0
         self.last_dt = float(delta_t)
         self.removals: list[Removal] = []
-        self.aux = np.zeros((pipeline.n_aux, state.n))
+        self.aux = np.zeros((pipeline.n_aux, state.n), dtype=self.dtype)
         self.on_removal = None
         self._fld = None
         #: (nb_start, nb_idx) of the current step (sphfoam.engine.codegen.Pipeline)
@@ -209,7 +213,7 @@ class Simulation:
     def _grid_args(self):
         st = self.state
         if self.aux.shape[1] != st.n:
-            self.aux = np.zeros((self.pipeline.n_aux, st.n))
+            self.aux = np.zeros((self.pipeline.n_aux, st.n), dtype=self.dtype)
         if self._fld is None or self._fld.shape[1] != st.n:
             names = self.pipeline.fields
             self._fld = (np.stack([st.extra[k] for k in names]) if names
