@@ -143,3 +143,49 @@ def test_no_array_is_allocated_per_step_while_the_list_is_reused(tutorial):
     made, freed = s1.alloc - s0.alloc, s1.free - s0.free
     assert made == freed and made <= 10 * 80      # freed in the step; a few per region
     assert n > 1500 and peak - before < 4 * n     # not one float array of the particles
+
+
+# --- the per-pair cache of kernel values ------------------------------------------------------
+def test_the_pair_cache_gives_the_uncached_rates_bit_for_bit(tutorial, monkeypatch):
+    """With a prepass (XSPH) every particle walks its list before the rates: it stores the
+    kernel gradient factor per listed pair and the rates and density loops read it. The
+    rates, sigma and drho/dt equal those of the same selection generated without the cache."""
+    from sphfoam.engine import codegen
+    from sphfoam.engine.terms import ContractError, Term
+
+    d = tutorial("damBreak", {"system/particleDict:dx": 0.02,
+                              "system/controlDict:functions": {},
+                              "constant/sphProperties:velocityCorrection": {"type": "xsph"}})
+    case = Case(d)
+    runner.setup_case(case, log=lambda *_: None)
+    sim = runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+    for _ in range(30):
+        sim.step()
+    pipe = sim.pipeline
+    assert "fw" in pipe.pair_cache
+    src = pipe.source_path.read_text()
+    assert "pc[J_fw, k] = fw" in src and "fw = pc[J_fw, k]" in src
+    st = sim.state
+    sim.eos()
+    sim.rates()
+    cached = [a.copy() for a in (st.ax, st.ay, st.drho, st.sigma)]
+    sim.density_rate()
+    cached.append(st.drho.copy())
+
+    monkeypatch.setattr(codegen.Assembly, "_pair_cache", lambda self: [])
+    plain = codegen.build_pipeline(pipe.selection, case.context, pipe.core)
+    assert plain.pair_cache == () and "pc[" not in plain.source_path.read_text()
+    args = sim._grid_args()[:-1]                       # without the cache
+    out = [np.zeros(st.n) for _ in range(4)]
+    plain.prepass(*args)
+    plain.rates(*args, *out)
+    drho = np.zeros(st.n)
+    plain.prepass(*args)
+    plain.density_rate(*args, drho)
+    for got, want in zip(cached, out + [drho]):
+        assert np.array_equal(got, want)
+
+    with pytest.raises(ContractError, match="does not define"):
+        from sphfoam.engine import terms as T
+        T.check([Term("bad", ("rates",), pair="x = 1", writes=("W",), cache=("Wab",))],
+                set(), {})

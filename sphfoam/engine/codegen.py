@@ -196,6 +196,7 @@ class Assembly:
             for w in t.writes:
                 if w.startswith("aux.") and w[4:] not in self.aux:
                     self.aux.append(w[4:])
+        self.cache = self._pair_cache()
         seen = [m for m in self.models if m.schedule() is not None]
         if len(seen) > 1:
             raise T.ContractError(f"{seen[0].family} {seen[0].name!r} and {seen[1].family} "
@@ -282,14 +283,55 @@ class Assembly:
                     changed = True
         return [t for t in terms if not t.on_demand or set(t.writes) & reads]
 
+    # --- the per-pair cache ------------------------------------------------------------------
+    def _unbranched_prepass(self) -> int | None:
+        """Index of the first prepass loop in which every particle walks its whole list
+        (all its terms apply to every particle), or None."""
+        for i, ts in enumerate(self._prepass_groups()):
+            if all("all" in t.applies for t in ts):
+                return i
+        return None
+
+    def _pair_cache(self) -> list[str]:
+        """Names of the geometry-only pair scalars (``Term.cache``) the loops after the
+        prepass read, when a prepass loop walks every particle's list and can store them
+        once per evaluation (exact: the same expression of the same r2 and q)."""
+        if self._unbranched_prepass() is None:
+            return []
+        names = []
+        # the loops of every evaluation (the periodic filter recomputes what it needs)
+        for stage in ("rates", "density"):
+            for applies in ("fluid", "wetWall"):
+                for t in self.needed(self.stage(stage, applies)):
+                    for n in t.cache:
+                        if n not in names:
+                            names.append(n)
+        return names
+
     # --- code ------------------------------------------------------------------------------
-    def neighbour_body(self, terms: list, sigma: bool = False) -> str:
+    def neighbour_body(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """Pair code of ``terms`` for one neighbour b: the definers and correctors of pair
-        quantities first, for every neighbour, then the others by neighbour kind."""
+        quantities first, for every neighbour, then the others by neighbour kind.
+        ``cache`` "store" (in the prepass) also defines the cached pair scalars and stores
+        them in ``pc[J_<name>, k]``; "read" (in the loops after it) reads them from there."""
         terms = self.needed(terms)
+        if cache == "store":
+            extra = [t for t in self.terms if t.on_demand and set(t.cache) & set(self.cache)
+                     and t not in terms]
+            terms = extra + terms
         pre = [t for t in terms if t.on_demand or set(t.corrects) & T.PAIR_QUANTITIES]
         rest = [t for t in terms if t not in pre]
-        pre_code = [expand_components(t.pair) for t in pre if t.pair]
+        pre_code = []
+        for t in pre:
+            code = t.pair
+            if cache == "read" and code:
+                for n in t.cache:
+                    if n in self.cache:
+                        code = re.sub(rf"(?m)^{re.escape(n)} = .*$", f"{n} = pc[J_{n}, k]",
+                                      code)
+            pre_code.append(expand_components(code) if code else "")
+        if cache == "store":
+            pre_code += [f"pc[J_{n}, k] = {n}" for n in self.cache]
         code = _NEIGHBOUR_LOAD + "\n".join(x for x in pre_code if x)
         disp = self._dispatch(rest)
         if disp:
@@ -371,20 +413,21 @@ class Assembly:
                              wrap=_block(wrap, 12) + ("\n" if wrap else ""),
                              body=_block(body, 12))
 
-    def pair_loop(self, terms: list, sigma: bool = False) -> str:
+    def pair_loop(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """The loop over the neighbour list of particle ``a`` with ``terms`` for each b."""
         wrap = self._wrap()
+        cache = cache if self.cache else None
         return _LIST.format(wrap=_block(wrap, 4) + ("\n" if wrap else ""),
-                            body=_block(self.neighbour_body(terms, sigma), 4))
+                            body=_block(self.neighbour_body(terms, sigma, cache), 4))
 
     def particle_code(self, terms: list, part: str) -> str:
         return "\n".join(expand_components(getattr(t, part)) for t in terms
                          if getattr(t, part))
 
-    def gather(self, terms: list, sigma: bool = False) -> str:
+    def gather(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """init, the neighbour loop and final of ``terms`` for one particle a."""
         return "\n".join(x for x in (self.particle_code(terms, "init"),
-                                     self.pair_loop(terms, sigma),
+                                     self.pair_loop(terms, sigma, cache),
                                      self.particle_code(terms, "final")) if x)
 
     def prepass_loops(self) -> list[str]:
@@ -393,18 +436,22 @@ class Assembly:
         reads the value they set and none reads it while it is written; then the others.
         Terms that apply to every particle run unbranched; otherwise fluid and wall
         particles each run the terms that apply to them."""
+        store = self._unbranched_prepass() if self.cache else None
+        return [self._prepass_body(ts, "store" if i == store else None)
+                for i, ts in enumerate(self._prepass_groups())]
+
+    def _prepass_groups(self) -> list[list]:
         pre = [t for t in self.terms if "prepass" in t.stages]
         state = [t for t in pre if not t.on_demand and
                  (set(t.writes) | set(t.corrects)) & set(T.STATE_QUANTITIES)]
         rest = [t for t in pre if t not in state]
         if state:
             state = [t for t in pre if t.on_demand] + state
-        return [self._prepass_body(ts) for ts in (state, rest)
-                if [t for t in ts if not t.on_demand]]
+        return [ts for ts in (state, rest) if [t for t in ts if not t.on_demand]]
 
-    def _prepass_body(self, ts: list) -> str:
+    def _prepass_body(self, ts: list, cache: str | None = None) -> str:
         if all("all" in t.applies for t in ts):
-            return self.gather(ts)
+            return self.gather(ts, cache=cache)
         fluid = [t for t in ts if {"all", "fluid"} & set(t.applies)]
         wall = [t for t in ts if {"all", "wall"} & set(t.applies)]
         wet = [t for t in ts if "wetWall" in t.applies and not {"all", "wall"} & set(t.applies)]
@@ -432,7 +479,7 @@ class Assembly:
         ts = [t for t in self.stage(stage, "wetWall") if t.pair or t.init or t.final]
         if not [t for t in ts if not t.on_demand]:
             return "pass"
-        body = self.gather(ts)
+        body = self.gather(ts, cache=None if stage == "step" else "read")
         cond = self._cond("wetWall", "a")
         if self.kinds["wetWall"] == "else":
             return body
@@ -443,7 +490,7 @@ def expand_components(code: str) -> str:
     return T.expand_components(code) if code else ""
 
 
-_ARGS = "x, y, u, v, rho, p, c, m, kind, nb_start, nb_idx, prm, aux, fld"
+_ARGS_BASE = "x, y, u, v, rho, p, c, m, kind, nb_start, nb_idx, prm, aux, fld"
 
 
 def generate_source(sel: Selection, param_names: list[str]) -> str:
@@ -456,6 +503,10 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     aux_const = "\n".join(f"I_{a} = {i}" for i, a in enumerate(aux))
     fields = asm.fields
     fld_const = "\n".join(f"F_{a} = {i}" for i, a in enumerate(fields))
+    cache = asm.cache
+    cache_const = "".join(f"\nJ_{a} = {i}" for i, a in enumerate(cache))
+    #: the arguments of every loop over pairs (``pc``: the per-pair cache, when there is one)
+    _ARGS = _ARGS_BASE + (", pc" if cache else "")
     eos = asm.particle_code(asm.stage("particle", "all"), "final")
 
     parts = [f'''"""sphfoam pipeline, generated for: {sel.describe()}; adjustTimeStep={sel.adjust_time_step}.
@@ -477,6 +528,7 @@ AUX = {tuple(aux)!r}
 {aux_const}
 FIELDS = {tuple(fields)!r}
 {fld_const}
+PAIR_CACHE = {tuple(cache)!r}{cache_const}
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
@@ -541,7 +593,7 @@ def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
         drho_a = 0.0
         sigma_a = 0.0
         if kind[a] == FLUID:
-{_block(asm.gather(fluid_rates, sigma=sel.adjust_time_step), 12)}
+{_block(asm.gather(fluid_rates, sigma=sel.adjust_time_step, cache="read"), 12)}
             acc_x += gx
             acc_y += gy
         else:
@@ -560,7 +612,7 @@ def density_rate({_ARGS}, out_drho):
 {_block(_PARTICLE_LOAD, 8)}
         drho_a = 0.0
         if kind[a] == FLUID:
-{_block(asm.gather(asm.stage("density", "fluid")), 12)}
+{_block(asm.gather(asm.stage("density", "fluid"), cache="read"), 12)}
         else:
 {_block(asm.wall_gather("density"), 12)}
         out_drho[a] = drho_a
@@ -755,6 +807,12 @@ class Pipeline:
         return tuple(self.module.FIELDS)
 
     @property
+    def pair_cache(self) -> tuple[str, ...]:
+        """Pair scalars the prepass stores per listed pair for the later loops of an
+        evaluation (``pc[J_<name>, k]``, an extra last argument of every pair loop)."""
+        return tuple(getattr(self.module, "PAIR_CACHE", ()))
+
+    @property
     def n_aux(self) -> int:
         return len(self.module.AUX)
 
@@ -836,6 +894,8 @@ def _warm_up(module, prm):
     nb_idx = np.zeros(int(nb_start[-1]), dtype=np.int32)
     module.fill_neighbours(*grid, nb_start, nb_idx)
     args = (x, y, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
+    if getattr(module, "PAIR_CACHE", ()):
+        args += (np.zeros((len(module.PAIR_CACHE), nb_idx.shape[0]), dtype=dt),)
     funcs = [module.equation_of_state, module.count_neighbours, module.fill_neighbours,
              module.rates, module.density_rate]
     module.rates(*args, f.copy(), f.copy(), f.copy(), f.copy())

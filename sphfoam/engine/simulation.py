@@ -94,6 +94,7 @@ class Simulation:
         self.aux = np.zeros((pipeline.n_aux, state.n), dtype=self.dtype)
         self.on_removal = None
         self._fld = None
+        self._pc = None
         #: (nb_start, nb_idx) of the current step (sphfoam.engine.codegen.Pipeline)
         self._nb = (None, None)
         #: positions at the last build of the list (None: rebuild at the next step)
@@ -221,8 +222,15 @@ class Simulation:
         nb_start, nb_idx = self._nb
         if nb_start is None or nb_start.shape[0] != st.n + 1:
             raise RuntimeError("the neighbour list is stale: call neighbour_update first")
-        return (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, nb_start, nb_idx,
+        args = (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, nb_start, nb_idx,
                 self.prm, self.aux, self._fld)
+        if self.pipeline.pair_cache:
+            # per listed pair: what the prepass stores for the later loops (kernel values)
+            if self._pc is None or self._pc.shape[1] != nb_idx.shape[0]:
+                self._pc = np.zeros((len(self.pipeline.pair_cache), nb_idx.shape[0]),
+                                    dtype=self.dtype)
+            args += (self._pc,)
+        return args
 
     def _prepass(self, args):
         if self.pipeline.prepass is not None:
