@@ -56,6 +56,8 @@ def test_single_precision_compiles_float32_loops_and_keeps_a_hydrostatic_tank(tu
     assert str(sig[11]) == "array(float32, 1d, C)"           # prm
     src = sim.pipeline.source_path.read_text()
     assert "dx_ab = F4(xa - x[b])" in src and "acc_x = F4(0.0)" in src
+    assert _local_types(sim, "rates", ("acc_x", "drho_a", "r2", "q", "fw", "pterm")) == \
+        {"float32"}                                         # no promotion back to float64
     dsim, double = runs["double"]
     assert dsim.state.u.dtype == np.float64 and dsim.prm.dtype == np.float64
     assert "F4(" not in dsim.pipeline.source_path.read_text()
@@ -66,6 +68,32 @@ def test_single_precision_compiles_float32_loops_and_keeps_a_hydrostatic_tank(tu
     assert 0 < np.max(np.abs(single["rho"] - double["rho"]))  # it did run in float32
     fields = st.to_fields(p=st.p)
     assert fields["rho"].dtype == fields["U"].dtype == np.float64   # written as double
+
+
+def _local_types(sim, func, names):
+    """numba's types of the locals ``names`` of the generated ``func``, compiled serially
+    (the parallel loop body is outlined, out of reach of inspect_types)."""
+    import importlib.util
+    import io
+    import re
+
+    src = sim.pipeline.source_path.read_text().replace("parallel=True", "parallel=False")
+    src = src.replace("cache=True", "cache=False").replace("prange(", "range(")
+    path = sim.pipeline.source_path.with_name("serial_check.py")
+    path.write_text(src)
+    spec = importlib.util.spec_from_file_location("sphfoam_serial_check", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    st = sim.state
+    getattr(mod, func)(*sim._grid_args(), st.ax, st.ay, st.drho, st.sigma)
+    out = io.StringIO()
+    getattr(mod, func).inspect_types(file=out)
+    found = set()
+    for m in re.finditer(r"#\s+(\w+)(?:\.\d+)? = .*::\s*(\w+)", out.getvalue()):
+        if m.group(1) in names:
+            found.add(m.group(2))
+    path.unlink()
+    return found
 
 
 def test_a_bad_precision_names_the_file_key_and_choices(tutorial):
