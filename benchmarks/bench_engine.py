@@ -207,6 +207,8 @@ def state_bytes(sim) -> dict:
     parts["neighbour list"] = (start.nbytes if start is not None else 0) + \
         (idx.nbytes if idx is not None else 0)
     parts["aux"] = sim.aux.nbytes
+    pc = getattr(sim, "_pc", None)
+    parts["pair cache"] = pc.nbytes if pc is not None else 0
     parts["fields"] = sim._fld.nbytes if isinstance(sim._fld, np.ndarray) else 0
     parts["cells"] = sim.cells.cell_start.nbytes
     ref = getattr(sim, "_ref", None)
