@@ -133,6 +133,8 @@ CASE_DIRS = {
 }
 #: which case ``make_sim`` builds ("engine": the synthetic dam break above, no case directory)
 CASE = "engine"
+#: sphSchemes precision of the --case runs (--precision)
+PRECISION = "double"
 
 #: peers measured on this machine kind (issue 12): one thread, user CPU, start-up cancelled,
 #: the matched dam break (23 018 particles)
@@ -159,8 +161,9 @@ def _rss_bytes() -> int:
 _case_size_cache: dict = {}
 
 
-def _case_size(src: Path) -> tuple[int, float]:
-    """(particles, dx) of a case at its own resolution (set up once in a scratch folder)."""
+def _case_size(src: Path) -> tuple[int, int, float]:
+    """(particles, fluid particles, dx) of a case at its own resolution (set up once in a
+    scratch folder)."""
     if src not in _case_size_cache:
         from sphfoam.case.case import Case
         from sphfoam.case.edit import clone_case
@@ -170,8 +173,50 @@ def _case_size(src: Path) -> tuple[int, float]:
             d = clone_case(src, Path(tmp) / src.name)
             case = Case(d)
             st = setup_case(case, log=lambda *_: None)
-            _case_size_cache[src] = (int(st.n), float(case.particles.dx))
+            _case_size_cache[src] = (int(st.n), int(st.n_fluid), float(case.particles.dx))
     return _case_size_cache[src]
+
+
+def dx_for(total: int, n0: int, n_fluid0: int, dx0: float) -> float:
+    """dx giving about ``total`` particles: the fluid count scales as 1/dx^2, the wall rows
+    (a fixed number of layers along the walls) as 1/dx, so solve
+    F dx0^2 / dx^2 + W dx0 / dx = total for 1/dx."""
+    import math as _m
+
+    a = n_fluid0 * dx0 * dx0
+    b = (n0 - n_fluid0) * dx0
+    if a <= 0.0:
+        return dx0 * n0 / total
+    z = (-b + _m.sqrt(b * b + 4.0 * a * total)) / (2.0 * a)
+    return 1.0 / z
+
+
+def state_bytes(sim) -> dict:
+    """Bytes held per particle by the simulation's arrays (state, extra fields, neighbour
+    list, aux, particle fields, cell starts): nbytes of each, divided by the particle count
+    (the resident-memory growth of the first configuration includes the compiler)."""
+    import numpy as np
+
+    st = sim.state
+    parts = {}
+    from sphfoam.engine.state import PERSISTENT_F8, PERSISTENT_I8, SCRATCH
+
+    parts["state"] = sum(getattr(st, k).nbytes for k in PERSISTENT_F8 + PERSISTENT_I8 + SCRATCH)
+    parts["extra"] = sum(a.nbytes for a in st.extra.values())
+    start, idx = sim._nb
+    parts["neighbour list"] = (start.nbytes if start is not None else 0) + \
+        (idx.nbytes if idx is not None else 0)
+    parts["aux"] = sim.aux.nbytes
+    pc = getattr(sim, "_pc", None)
+    parts["pair cache"] = pc.nbytes if pc is not None else 0
+    parts["fields"] = sim._fld.nbytes if isinstance(sim._fld, np.ndarray) else 0
+    parts["cells"] = sim.cells.cell_start.nbytes
+    ref = getattr(sim, "_ref", None)
+    parts["list reference"] = sum(a.nbytes for a in ref) if ref is not None else 0
+    n = max(st.n, 1)
+    out = {k: v / n for k, v in parts.items()}
+    out["total"] = sum(parts.values()) / n
+    return out
 
 
 def make_case_sim(name: str, total: int):
@@ -187,11 +232,13 @@ def make_case_sim(name: str, total: int):
     from sphfoam.io.fields import read_state
 
     src = CASE_DIRS[name]
-    n0, dx0 = _case_size(src)
-    dx = dx0 * _m.sqrt(n0 / total)
+    n0, nf0, dx0 = _case_size(src)
+    dx = dx_for(total, n0, nf0, dx0)
     tmp = Path(tempfile.mkdtemp(prefix="sphfoam-bench-case-"))
-    d = clone_case(src, tmp / src.name, {"system/particleDict:dx": dx,
-                                         "system/controlDict:functions": {}})
+    edits = {"system/particleDict:dx": dx, "system/controlDict:functions": {}}
+    if PRECISION != "double":
+        edits["system/sphSchemes:precision"] = PRECISION
+    d = clone_case(src, tmp / src.name, edits)
     case = Case(d)
     runner.setup_case(case, log=lambda *_: None)
     state = ParticleState.from_fields(read_state(d / "0"))
@@ -200,9 +247,12 @@ def make_case_sim(name: str, total: int):
     sim.step()
     st = sim.state
     mem = (_rss_bytes() - rss0) / max(st.n, 1)
+    arrays = state_bytes(sim)
     return sim, dict(case=name, dx=dx, h=sim.h, n=int(st.n), n_fluid=int(st.n_fluid),
                      n_wall=int(st.n - st.n_fluid), cells=(sim.cells.ncx, sim.cells.ncy),
-                     bytes_per_particle=mem, models=sim.pipeline.selection.describe(),
+                     bytes_per_particle=arrays["total"], array_bytes_per_particle=arrays,
+                     rss_bytes_per_particle=mem, precision=PRECISION,
+                     models=sim.pipeline.selection.describe(),
                      integrator=sim.integrator.name)
 
 
@@ -560,7 +610,8 @@ def measure_compile(cache_dir: Path, small_n: int):
     for label in ("cold", "cached"):
         t0 = time.perf_counter()
         cp = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--_compile-child",
-                             str(small_n), "--case", CASE], env=env, capture_output=True,
+                             str(small_n), "--case", CASE, "--precision", PRECISION],
+                            env=env, capture_output=True,
                             text=True,
                             cwd=str(REPO))
         wall = time.perf_counter() - t0
@@ -798,12 +849,17 @@ def main(argv=None):
                     help="engine: the synthetic dam break (default); matched: the dam break "
                     "matched with DualSPHysics (benchmarks/cases/damBreakMatched); flume: "
                     "tutorials/solitaryWave; wall: tutorials/solitaryWallRunup (P's set-up)")
+    ap.add_argument("--precision", choices=["double", "single"], default="double",
+                    help="sphSchemes precision of the --case runs (default double)")
     ap.add_argument("--_compile-child", type=int, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    global CASE
+    global CASE, PRECISION
     CASE = args.case
+    PRECISION = args.precision
+    if PRECISION != "double" and CASE == "engine":
+        ap.error("--precision single needs --case (matched, flume or wall)")
     if CASE != "engine" and args.tag is None:
-        args.tag = CASE
+        args.tag = CASE + ("" if PRECISION == "double" else "-" + PRECISION)
 
     if args._compile_child is not None:
         compile_child(args._compile_child)

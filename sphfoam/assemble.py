@@ -20,7 +20,8 @@ def selection(case: Case) -> Selection:
     periodic = domain.periodic if domain is not None else []
     return Selection(**{f: case.models.sph[f] for f in SPH_FAMILIES},
                      adjust_time_step=case.control.adjustTimeStep,
-                     periodic_x="x" in periodic, periodic_y="y" in periodic)
+                     periodic_x="x" in periodic, periodic_y="y" in periodic,
+                     precision=case.schemes.precision)
 
 
 def build_simulation(case: Case, state: ParticleState) -> Simulation:

@@ -175,6 +175,10 @@ class SphSchemes(Strict):
     integrator: ModelSpec = ModelSpec(type="monaghan2007")
     timeStepControl: TimeStepControl = TimeStepControl()
     neighbourSearch: NeighbourSearch = NeighbourSearch()
+    precision: Literal["double", "single"] = Field("double", description=(
+        "working precision of velocities, density, pressure and the pair arithmetic: "
+        "double, or single (float32; positions stay double, relative positions are formed "
+        "in double and then rounded)"))
 
 
 # --- constant/ -----------------------------------------------------------------------------

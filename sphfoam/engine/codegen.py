@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import os
+import re
 import sys
 import textwrap
 import time
@@ -76,6 +77,14 @@ class Selection:
     adjust_time_step: bool = True
     periodic_x: bool = False
     periodic_y: bool = False
+    #: ``sphSchemes`` ``precision``: "double", or "single" (float32 velocities, density,
+    #: pressure, aux, coefficients and pair arithmetic; positions in double)
+    precision: str = "double"
+
+    @property
+    def dtype(self):
+        """The numpy type of the working arrays and coefficients."""
+        return np.dtype(np.float32 if self.precision == "single" else np.float64)
 
     def models(self):
         return [m for m in (self.kernel, self.equationOfState, self.continuity, self.momentum,
@@ -87,7 +96,8 @@ class Selection:
     def describe(self) -> str:
         txt = ", ".join(f"{m.family}={m.name}" for m in self.models() if m.name != "none")
         per = "".join(a for a, on in (("x", self.periodic_x), ("y", self.periodic_y)) if on)
-        return txt + (f", periodic={per}" if per else "")
+        txt += f", periodic={per}" if per else ""
+        return txt + (", precision=single" if self.precision == "single" else "")
 
     def assembly(self) -> "Assembly":
         return Assembly(self)
@@ -186,6 +196,7 @@ class Assembly:
             for w in t.writes:
                 if w.startswith("aux.") and w[4:] not in self.aux:
                     self.aux.append(w[4:])
+        self.cache = self._pair_cache()
         seen = [m for m in self.models if m.schedule() is not None]
         if len(seen) > 1:
             raise T.ContractError(f"{seen[0].family} {seen[0].name!r} and {seen[1].family} "
@@ -272,14 +283,55 @@ class Assembly:
                     changed = True
         return [t for t in terms if not t.on_demand or set(t.writes) & reads]
 
+    # --- the per-pair cache ------------------------------------------------------------------
+    def _unbranched_prepass(self) -> int | None:
+        """Index of the first prepass loop in which every particle walks its whole list
+        (all its terms apply to every particle), or None."""
+        for i, ts in enumerate(self._prepass_groups()):
+            if all("all" in t.applies for t in ts):
+                return i
+        return None
+
+    def _pair_cache(self) -> list[str]:
+        """Names of the geometry-only pair scalars (``Term.cache``) the loops after the
+        prepass read, when a prepass loop walks every particle's list and can store them
+        once per evaluation (exact: the same expression of the same r2 and q)."""
+        if self._unbranched_prepass() is None:
+            return []
+        names = []
+        # the loops of every evaluation (the periodic filter recomputes what it needs)
+        for stage in ("rates", "density"):
+            for applies in ("fluid", "wetWall"):
+                for t in self.needed(self.stage(stage, applies)):
+                    for n in t.cache:
+                        if n not in names:
+                            names.append(n)
+        return names
+
     # --- code ------------------------------------------------------------------------------
-    def neighbour_body(self, terms: list, sigma: bool = False) -> str:
+    def neighbour_body(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """Pair code of ``terms`` for one neighbour b: the definers and correctors of pair
-        quantities first, for every neighbour, then the others by neighbour kind."""
+        quantities first, for every neighbour, then the others by neighbour kind.
+        ``cache`` "store" (in the prepass) also defines the cached pair scalars and stores
+        them in ``pc[J_<name>, k]``; "read" (in the loops after it) reads them from there."""
         terms = self.needed(terms)
+        if cache == "store":
+            extra = [t for t in self.terms if t.on_demand and set(t.cache) & set(self.cache)
+                     and t not in terms]
+            terms = extra + terms
         pre = [t for t in terms if t.on_demand or set(t.corrects) & T.PAIR_QUANTITIES]
         rest = [t for t in terms if t not in pre]
-        pre_code = [expand_components(t.pair) for t in pre if t.pair]
+        pre_code = []
+        for t in pre:
+            code = t.pair
+            if cache == "read" and code:
+                for n in t.cache:
+                    if n in self.cache:
+                        code = re.sub(rf"(?m)^{re.escape(n)} = .*$", f"{n} = pc[J_{n}, k]",
+                                      code)
+            pre_code.append(expand_components(code) if code else "")
+        if cache == "store":
+            pre_code += [f"pc[J_{n}, k] = {n}" for n in self.cache]
         code = _NEIGHBOUR_LOAD + "\n".join(x for x in pre_code if x)
         disp = self._dispatch(rest)
         if disp:
@@ -361,20 +413,21 @@ class Assembly:
                              wrap=_block(wrap, 12) + ("\n" if wrap else ""),
                              body=_block(body, 12))
 
-    def pair_loop(self, terms: list, sigma: bool = False) -> str:
+    def pair_loop(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """The loop over the neighbour list of particle ``a`` with ``terms`` for each b."""
         wrap = self._wrap()
+        cache = cache if self.cache else None
         return _LIST.format(wrap=_block(wrap, 4) + ("\n" if wrap else ""),
-                            body=_block(self.neighbour_body(terms, sigma), 4))
+                            body=_block(self.neighbour_body(terms, sigma, cache), 4))
 
     def particle_code(self, terms: list, part: str) -> str:
         return "\n".join(expand_components(getattr(t, part)) for t in terms
                          if getattr(t, part))
 
-    def gather(self, terms: list, sigma: bool = False) -> str:
+    def gather(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """init, the neighbour loop and final of ``terms`` for one particle a."""
         return "\n".join(x for x in (self.particle_code(terms, "init"),
-                                     self.pair_loop(terms, sigma),
+                                     self.pair_loop(terms, sigma, cache),
                                      self.particle_code(terms, "final")) if x)
 
     def prepass_loops(self) -> list[str]:
@@ -383,18 +436,22 @@ class Assembly:
         reads the value they set and none reads it while it is written; then the others.
         Terms that apply to every particle run unbranched; otherwise fluid and wall
         particles each run the terms that apply to them."""
+        store = self._unbranched_prepass() if self.cache else None
+        return [self._prepass_body(ts, "store" if i == store else None)
+                for i, ts in enumerate(self._prepass_groups())]
+
+    def _prepass_groups(self) -> list[list]:
         pre = [t for t in self.terms if "prepass" in t.stages]
         state = [t for t in pre if not t.on_demand and
                  (set(t.writes) | set(t.corrects)) & set(T.STATE_QUANTITIES)]
         rest = [t for t in pre if t not in state]
         if state:
             state = [t for t in pre if t.on_demand] + state
-        return [self._prepass_body(ts) for ts in (state, rest)
-                if [t for t in ts if not t.on_demand]]
+        return [ts for ts in (state, rest) if [t for t in ts if not t.on_demand]]
 
-    def _prepass_body(self, ts: list) -> str:
+    def _prepass_body(self, ts: list, cache: str | None = None) -> str:
         if all("all" in t.applies for t in ts):
-            return self.gather(ts)
+            return self.gather(ts, cache=cache)
         fluid = [t for t in ts if {"all", "fluid"} & set(t.applies)]
         wall = [t for t in ts if {"all", "wall"} & set(t.applies)]
         wet = [t for t in ts if "wetWall" in t.applies and not {"all", "wall"} & set(t.applies)]
@@ -422,7 +479,7 @@ class Assembly:
         ts = [t for t in self.stage(stage, "wetWall") if t.pair or t.init or t.final]
         if not [t for t in ts if not t.on_demand]:
             return "pass"
-        body = self.gather(ts)
+        body = self.gather(ts, cache=None if stage == "step" else "read")
         cond = self._cond("wetWall", "a")
         if self.kinds["wetWall"] == "else":
             return body
@@ -433,7 +490,7 @@ def expand_components(code: str) -> str:
     return T.expand_components(code) if code else ""
 
 
-_ARGS = "x, y, u, v, rho, p, c, m, kind, nb_start, nb_idx, prm, aux, fld"
+_ARGS_BASE = "x, y, u, v, rho, p, c, m, kind, nb_start, nb_idx, prm, aux, fld"
 
 
 def generate_source(sel: Selection, param_names: list[str]) -> str:
@@ -446,6 +503,10 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     aux_const = "\n".join(f"I_{a} = {i}" for i, a in enumerate(aux))
     fields = asm.fields
     fld_const = "\n".join(f"F_{a} = {i}" for i, a in enumerate(fields))
+    cache = asm.cache
+    cache_const = "".join(f"\nJ_{a} = {i}" for i, a in enumerate(cache))
+    #: the arguments of every loop over pairs (``pc``: the per-pair cache, when there is one)
+    _ARGS = _ARGS_BASE + (", pc" if cache else "")
     eos = asm.particle_code(asm.stage("particle", "all"), "final")
 
     parts = [f'''"""sphfoam pipeline, generated for: {sel.describe()}; adjustTimeStep={sel.adjust_time_step}.
@@ -467,6 +528,7 @@ AUX = {tuple(aux)!r}
 {aux_const}
 FIELDS = {tuple(fields)!r}
 {fld_const}
+PAIR_CACHE = {tuple(cache)!r}{cache_const}
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
@@ -531,7 +593,7 @@ def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
         drho_a = 0.0
         sigma_a = 0.0
         if kind[a] == FLUID:
-{_block(asm.gather(fluid_rates, sigma=sel.adjust_time_step), 12)}
+{_block(asm.gather(fluid_rates, sigma=sel.adjust_time_step, cache="read"), 12)}
             acc_x += gx
             acc_y += gy
         else:
@@ -550,7 +612,7 @@ def density_rate({_ARGS}, out_drho):
 {_block(_PARTICLE_LOAD, 8)}
         drho_a = 0.0
         if kind[a] == FLUID:
-{_block(asm.gather(asm.stage("density", "fluid")), 12)}
+{_block(asm.gather(asm.stage("density", "fluid"), cache="read"), 12)}
         else:
 {_block(asm.wall_gather("density"), 12)}
         out_drho[a] = drho_a
@@ -603,7 +665,51 @@ def density_filter({_ARGS}, out_rho):
 {_block(asm.gather(filt), 12)}
         out_rho[a] = rho_new
 ''')
-    return "".join(parts)
+    src = "".join(parts)
+    if sel.precision == "single":
+        src = single_precision(src, imports)
+    elif sel.precision != "double":
+        raise ValueError(f"precision {sel.precision!r}: valid are double, single")
+    return src
+
+
+_FLOAT_LITERAL = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\d+|\.\d+)"
+                            r"(?![\w.])")
+#: functions whose loops run in the working precision (not the cell walk, which bins and
+#: measures positions in double)
+_SINGLE_FUNCS = ("equation_of_state", "prepass", "rates", "density_rate", "step_pass",
+                 "density_filter")
+
+
+def single_precision(src: str, imports) -> str:
+    """The pipeline source in single precision: in the pair and particle loops every float
+    literal becomes ``F4(literal)`` and every result of an imported jitted function (the
+    kernel) is rounded to float32, and the relative position of a pair is formed in double
+    and then rounded (``dx_ab = F4(xa - x[b])``), so that, with float32 arrays and
+    coefficients, numba keeps the arithmetic in float32 instead of promoting it to float64
+    (Python float literals are float64 to numba)."""
+    names = []
+    for line in imports:
+        if " import " in line:
+            for item in line.split(" import ", 1)[1].split(","):
+                names.append(item.split(" as ")[-1].strip())
+    calls = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\(([^()]*)\)") \
+        if names else None
+    out = []
+    blocks = re.split(r"(?m)^(?=@njit)", src)
+    for blk in blocks:
+        m = re.search(r"(?m)^def (\w+)\(", blk)
+        if m and m.group(1) in _SINGLE_FUNCS:
+            head, body = blk.split("\n", 1)[0], blk.split("\n", 1)[1]
+            body = _FLOAT_LITERAL.sub(r"F4(\1)", body)
+            if calls is not None:
+                body = calls.sub(r"F4(\1(\2))", body)
+            body = body.replace("dx_ab = xa - x[b]", "dx_ab = F4(xa - x[b])")
+            body = body.replace("dy_ab = ya - y[b]", "dy_ab = F4(ya - y[b])")
+            blk = head + "\n" + body
+        out.append(blk)
+    src = "".join(out)
+    return src.replace("\nFLUID = 0\n", "\nF4 = np.float32\nFLUID = 0\n", 1)
 
 
 def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> dict:
@@ -636,11 +742,20 @@ class Pipeline:
 
     @property
     def h(self) -> float:
+        if self.core is not None:
+            return float(self.core["h"])
         return float(self.prm[CORE_PARAMS.index("h")])
 
     @property
     def support_radius(self) -> float:
+        if self.core is not None:
+            return float(np.sqrt(self.core["support2"]))
         return float(np.sqrt(self.prm[CORE_PARAMS.index("support2")]))
+
+    @property
+    def dtype(self):
+        """The numpy type of the state arrays, ``aux`` and ``prm`` the functions take."""
+        return self.prm.dtype
 
     @property
     def equation_of_state(self):
@@ -690,6 +805,12 @@ class Pipeline:
     @property
     def fields(self) -> tuple[str, ...]:
         return tuple(self.module.FIELDS)
+
+    @property
+    def pair_cache(self) -> tuple[str, ...]:
+        """Pair scalars the prepass stores per listed pair for the later loops of an
+        evaluation (``pc[J_<name>, k]``, an extra last argument of every pair loop)."""
+        return tuple(getattr(self.module, "PAIR_CACHE", ()))
 
     @property
     def n_aux(self) -> int:
@@ -742,7 +863,7 @@ def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
         module = importlib.util.module_from_spec(spec)
         sys.modules[modname] = module
         spec.loader.exec_module(module)
-    prm = np.array([params[k] for k in names], dtype=np.float64)
+    prm = np.array([params[k] for k in names], dtype=sel.dtype)
     t0 = time.perf_counter()
     funcs = _warm_up(module, prm)
     seconds = time.perf_counter() - t0
@@ -753,24 +874,28 @@ def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
 def _warm_up(module, prm):
     """Compile (or load from numba's cache) every function with the real argument types."""
     n = 2
-    f = np.zeros(n)
-    x = np.array([0.0, 0.5 * prm[0]])
+    dt = prm.dtype               # the working precision (positions and fields: double)
+    f = np.zeros(n, dtype=dt)
+    x = np.array([0.0, 0.5 * float(prm[0])])
+    y = np.zeros(n)
     kind = np.zeros(n, dtype=np.int64)
-    m = np.ones(n)
-    rho = np.full(n, 1000.0)
+    m = np.ones(n, dtype=dt)
+    rho = np.full(n, 1000.0, dtype=dt)
     cell_start = np.array([0, 2], dtype=np.int64)
-    aux = np.zeros((len(module.AUX), n))
+    aux = np.zeros((len(module.AUX), n), dtype=dt)
     fld = np.zeros((len(module.FIELDS), n))
     module.equation_of_state(rho, f.copy(), f.copy(), prm)
     count = np.zeros(n, dtype=np.int64)
-    grid = (x, f, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, float(prm[0]) ** 2 * 16.0)
+    grid = (x, y, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm, float(prm[0]) ** 2 * 16.0)
     module.count_neighbours(*grid, count)
     # sized from the count: with periodic axes the single cell is walked 3 x 3 times, so
     # each particle finds its neighbour up to nine times (a fixed list of two overflowed)
     nb_start = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
     nb_idx = np.zeros(int(nb_start[-1]), dtype=np.int32)
     module.fill_neighbours(*grid, nb_start, nb_idx)
-    args = (x, f, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
+    args = (x, y, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
+    if getattr(module, "PAIR_CACHE", ()):
+        args += (np.zeros((len(module.PAIR_CACHE), nb_idx.shape[0]), dtype=dt),)
     funcs = [module.equation_of_state, module.count_neighbours, module.fill_neighbours,
              module.rates, module.density_rate]
     module.rates(*args, f.copy(), f.copy(), f.copy(), f.copy())

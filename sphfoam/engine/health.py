@@ -201,8 +201,11 @@ class Snapshot:
         real = st.kind != GHOST if getattr(sim, "mirror", False) else None
         n = st.n if real is None else int(np.count_nonzero(real))
         extra = tuple(st.extra)
-        if n != self.n or extra != self.extra:
-            self.arrays = {k: np.empty(n, dtype=np.float64) for k in PERSISTENT_F8 + extra}
+        if n != self.n or extra != self.extra or self.arrays.get("u") is None or \
+                self.arrays["u"].dtype != st.u.dtype:
+            # in the state's own precision (sphSchemes precision: float32 velocities, density)
+            self.arrays = {k: np.empty(n, dtype=getattr(st, k).dtype) for k in PERSISTENT_F8}
+            self.arrays.update({k: np.empty(n, dtype=np.float64) for k in extra})
             self.arrays.update({k: np.empty(n, dtype=np.int64) for k in PERSISTENT_I8})
             self.n, self.extra = n, extra
         for k in PERSISTENT_F8 + PERSISTENT_I8:

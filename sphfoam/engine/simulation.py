@@ -53,6 +53,10 @@ class Simulation:
         self.state = state
         self.pipeline = pipeline
         self.prm = pipeline.prm
+        #: the working precision of the pipeline (``sphSchemes`` ``precision``)
+        self.dtype = pipeline.prm.dtype
+        if state.dtype != self.dtype:
+            state.set_precision(self.dtype)
         self.integrator = integrator
         #: the smoothing length and support radius are the pipeline's (one source of truth);
         #: ``h`` and ``support`` (in units of h), when given, must agree with them
@@ -87,9 +91,10 @@ class Simulation:
         self.step_index = 0
         self.last_dt = float(delta_t)
         self.removals: list[Removal] = []
-        self.aux = np.zeros((pipeline.n_aux, state.n))
+        self.aux = np.zeros((pipeline.n_aux, state.n), dtype=self.dtype)
         self.on_removal = None
         self._fld = None
+        self._pc = None
         #: (nb_start, nb_idx) of the current step (sphfoam.engine.codegen.Pipeline)
         self._nb = (None, None)
         #: positions at the last build of the list (None: rebuild at the next step)
@@ -101,16 +106,19 @@ class Simulation:
         self.segments = list(segments)
         self._hooks = {name: sel.hooks(name) for name in
                        ("before_neighbours", "add_particles", "after_sort",
-                        "before_evaluation", "walls_moved", "after_step")}
+                        "before_evaluation", "walls_moved", "after_step", "keeps_neighbours")}
         #: the models that make the advection velocity, applied in selection order, each to
         #: the previous one's result (XSPH, then a particle shifting)
         self._advection = sel.hooks("advection_velocity")
         self._summaries = sel.hooks("summary")
         #: list radius (the cell side) minus the support: how far pairs may close in
         self.skin = self.cells.cell_size - reach
-        #: a model that adds or removes particles every step needs a new list every step
-        self.reuse_neighbours = not (self._hooks["add_particles"] or
-                                     self._hooks["before_neighbours"])
+        #: a model that adds or removes particles at the neighbour update needs a new list
+        #: every step, unless it says (``keeps_neighbours``) when the particles it added
+        #: still serve
+        changers = [m for m in sel.models() if m.implements("add_particles") or
+                    m.implements("before_neighbours")]
+        self.reuse_neighbours = all(m.implements("keeps_neighbours") for m in changers)
         for attach in sel.hooks("attach"):
             attach(self)
 
@@ -151,10 +159,10 @@ class Simulation:
         self._ref = None
 
     def _list_still_valid(self) -> bool:
-        """Whether the neighbour list of an earlier step serves this one: no particle added
-        by a model, none left the domain, and every pair now within the support is listed
-        even after this step's motion (largest displacement since the build plus 1.5 v_max
-        dt < skin / 2)."""
+        """Whether the neighbour list of an earlier step serves this one: none left the
+        domain, every pair now within the support is listed even after this step's motion
+        (largest displacement since the build plus 1.5 v_max dt < skin / 2), and every model
+        that adds particles says they still serve (``keeps_neighbours``)."""
         st = self.state
         ref = self._ref
         if ref is None or not self.reuse_neighbours or ref[0].shape[0] != st.n:
@@ -167,7 +175,9 @@ class Simulation:
         if out:
             return False
         reach = math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt
-        return reach < 0.5 * self.skin
+        if not reach < 0.5 * self.skin:
+            return False
+        return all(keeps(self) for keeps in self._hooks["keeps_neighbours"])
 
     def neighbour_update(self):
         """The neighbour list of this step: the previous one while it is valid; otherwise bin
@@ -204,7 +214,7 @@ class Simulation:
     def _grid_args(self):
         st = self.state
         if self.aux.shape[1] != st.n:
-            self.aux = np.zeros((self.pipeline.n_aux, st.n))
+            self.aux = np.zeros((self.pipeline.n_aux, st.n), dtype=self.dtype)
         if self._fld is None or self._fld.shape[1] != st.n:
             names = self.pipeline.fields
             self._fld = (np.stack([st.extra[k] for k in names]) if names
@@ -212,8 +222,15 @@ class Simulation:
         nb_start, nb_idx = self._nb
         if nb_start is None or nb_start.shape[0] != st.n + 1:
             raise RuntimeError("the neighbour list is stale: call neighbour_update first")
-        return (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, nb_start, nb_idx,
+        args = (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, nb_start, nb_idx,
                 self.prm, self.aux, self._fld)
+        if self.pipeline.pair_cache:
+            # per listed pair: what the prepass stores for the later loops (kernel values)
+            if self._pc is None or self._pc.shape[1] != nb_idx.shape[0]:
+                self._pc = np.zeros((len(self.pipeline.pair_cache), nb_idx.shape[0]),
+                                    dtype=self.dtype)
+            args += (self._pc,)
+        return args
 
     def _prepass(self, args):
         if self.pipeline.prepass is not None:

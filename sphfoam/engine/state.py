@@ -13,6 +13,10 @@ PERSISTENT_F8 = ("x", "y", "u", "v", "rho", "m")
 PERSISTENT_I8 = ("kind", "id")
 #: per-step work arrays (recomputed, never written)
 SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma", "u_half", "v_half")
+#: arrays held in the working precision (``sphSchemes`` ``precision``): everything but the
+#: positions, the kind/id and the extra fields, which stay double (positions as DualSPHysics
+#: keeps them: relative positions are formed in double, then rounded)
+WORKING = ("u", "v", "rho", "m")
 
 
 class ParticleState:
@@ -36,12 +40,22 @@ class ParticleState:
             if getattr(self, name).shape != (n,):
                 raise ValueError(f"particle field {name!r} has shape "
                                  f"{getattr(self, name).shape}, expected ({n},)")
+        #: the working precision of velocities, density, mass and the scratch arrays
+        self.dtype = np.dtype(np.float64)
+        self._alloc_scratch()
+
+    def set_precision(self, dtype) -> None:
+        """Hold velocities, density, mass and the scratch arrays in ``dtype`` (float64 or
+        float32); positions stay float64."""
+        self.dtype = np.dtype(dtype)
+        for name in WORKING:
+            setattr(self, name, np.ascontiguousarray(getattr(self, name), dtype=self.dtype))
         self._alloc_scratch()
 
     def _alloc_scratch(self):
         n = self.n
         for name in SCRATCH:
-            setattr(self, name, np.zeros(n))
+            setattr(self, name, np.zeros(n, dtype=self.dtype))
 
     @property
     def n(self) -> int:
@@ -54,15 +68,22 @@ class ParticleState:
     def apply(self, order: np.ndarray, permute):
         """Reorder every persistent array by ``order`` (one numba pass, no Python loops)."""
         extra = list(self.extra)
-        f8 = np.stack([getattr(self, n) for n in PERSISTENT_F8] + [self.extra[k] for k in extra])
+        f8_names = [n for n in PERSISTENT_F8 if getattr(self, n).dtype == np.float64]
+        f4_names = [n for n in PERSISTENT_F8 if n not in f8_names]
+        f8 = np.stack([getattr(self, n) for n in f8_names] + [self.extra[k] for k in extra])
         i8 = np.stack([getattr(self, n) for n in PERSISTENT_I8])
         out_f, out_i = permute(order, f8, i8)
         for k, name in enumerate(extra):
-            self.extra[name] = out_f[len(PERSISTENT_F8) + k]
-        for k, name in enumerate(PERSISTENT_F8):
+            self.extra[name] = out_f[len(f8_names) + k]
+        for k, name in enumerate(f8_names):
             setattr(self, name, out_f[k])
         for k, name in enumerate(PERSISTENT_I8):
             setattr(self, name, out_i[k])
+        if f4_names:
+            out_4, _ = permute(order, np.stack([getattr(self, n) for n in f4_names]),
+                               np.empty((0, order.shape[0]), dtype=np.int64))
+            for k, name in enumerate(f4_names):
+                setattr(self, name, out_4[k])
 
     def keep(self, mask: np.ndarray):
         """Drop the particles where ``mask`` is False."""
@@ -76,7 +97,9 @@ class ParticleState:
         """Add particles at the end (extra fields get zeros)."""
         k = len(x)
         for name, new in zip(PERSISTENT_F8 + PERSISTENT_I8, (x, y, u, v, rho, m, kind, id)):
-            setattr(self, name, np.ascontiguousarray(np.concatenate([getattr(self, name), new])))
+            old = getattr(self, name)
+            setattr(self, name, np.ascontiguousarray(np.concatenate(
+                [old, np.asarray(new, dtype=old.dtype)])))
         for name in self.extra:
             self.extra[name] = np.concatenate([self.extra[name], np.zeros(k)])
         self._alloc_scratch()
@@ -88,9 +111,9 @@ class ParticleState:
         sel = slice(None) if real.all() else real
         out = {
             "positions": np.column_stack([self.x[sel], self.y[sel]]),
-            "U": np.column_stack([self.u[sel], self.v[sel]]),
-            "rho": self.rho[sel].copy(),
-            "mass": self.m[sel].copy(),
+            "U": np.column_stack([self.u[sel], self.v[sel]]).astype(np.float64, copy=False),
+            "rho": self.rho[sel].astype(np.float64),
+            "mass": self.m[sel].astype(np.float64),
             "type": self.kind[sel].copy(),
             "origId": self.id[sel].copy(),
         }

@@ -27,6 +27,8 @@ with its own components (see docs/developing.md).
 
 from __future__ import annotations
 
+import re
+
 import textwrap
 from dataclasses import dataclass, field, replace
 
@@ -98,6 +100,11 @@ class Term:
     writes: tuple[str, ...] = ()
     #: quantities this term changes after their definer (e.g. a kernel correction of gradW)
     corrects: tuple[str, ...] = ()
+    #: per-pair scalars an on-demand term defines on a line of their own (``name = ...``)
+    #: from the pair's geometry (r2, q, d@_ab) and coefficients alone: the engine may compute
+    #: them once per evaluation, in the prepass, and let the later loops of that evaluation
+    #: read them from a per-pair array instead (the kernel value and gradient factor)
+    cache: tuple[str, ...] = ()
     #: the model that contributed it (set by :func:`collect`)
     owner: object = field(default=None, compare=False)
 
@@ -177,6 +184,14 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
     for c, t in correctors.items():
         if c not in definers:
             raise ContractError(f"{t.who()} corrects {c!r}, which no selected model defines")
+    for t in terms:
+        for name in t.cache:
+            if not t.on_demand or t.reads:
+                raise ContractError(f"{t.who()} caches {name!r} but is not a definer of pair "
+                                    "quantities from the geometry alone (on demand, no reads)")
+            if not re.search(rf"(?m)^{re.escape(name)} = ", t.pair):
+                raise ContractError(f"{t.who()} caches {name!r}, which its pair code does not "
+                                    f"define on a line of its own ('{name} = ...')")
     for t in terms:
         for r in t.reads:
             if r.startswith("aux."):

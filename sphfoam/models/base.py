@@ -34,6 +34,11 @@ selected model that implements them; the engine names no model):
 ``before_neighbours(sim)``         at the start of each neighbour update (before binning)
 ``add_particles(sim, cell)``       after binning; may append particles (e.g. mirror ghosts)
                                    and returns the cell index of the appended ones
+``keeps_neighbours(sim)``          at the start of a step whose neighbour list could be reused
+                                   (no particle moved too far since it was built): whether the
+                                   particles this model added at the build still serve (True:
+                                   reuse). A model with ``add_particles`` or ``before_neighbours``
+                                   and without this hook gets a new list every step
 ``after_sort(sim, order)``         after the particles were re-sorted by ``order``
 ``before_evaluation(sim)``         before every evaluation of the pipeline (e.g. refresh ghosts)
 ``walls_moved(sim, offsets, velocities)``  prescribed wall motion at a stage time
@@ -53,8 +58,8 @@ from sphfoam.registry import Model
 __all__ = ["CaseContext", "PipelineModel", "Term", "HOOK_NAMES"]
 
 #: the run-time hooks above
-HOOK_NAMES = ("attach", "before_neighbours", "add_particles", "after_sort", "before_evaluation",
-              "walls_moved", "after_step", "advection_velocity", "summary")
+HOOK_NAMES = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
+              "before_evaluation", "walls_moved", "after_step", "advection_velocity", "summary")
 
 
 class PipelineModel(Model):

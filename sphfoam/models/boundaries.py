@@ -224,13 +224,26 @@ class MirrorGhosts(Boundary):
         return {"ghost": "else"}
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
+    # Ghosts are made when the neighbour list is built, for every fluid particle within the
+    # list radius R (the cell side) of a segment, projecting onto it extended by the skin
+    # R - support, and kept (refreshed) while the list is reused. At the start of each step
+    # (the neighbour update) a ghost is *active* when it meets the criterion of T(3.77), within
+    # the support and projecting onto the segment itself: exactly the ghosts a rebuild would
+    # make. Dormant ones carry mass 0 through the step, so that they add exactly 0.0 to every
+    # mass-weighted sum; ``keeps_neighbours`` asks for a rebuild when the active set is not
+    # that of a rebuild (a particle qualifies without a ghost) or a dormant ghost is within
+    # the support of a fluid particle (only where the walls are not convex).
     def attach(self, sim):
         if not sim.segments:
             raise ValueError("mirrorGhosts needs walls in system/particleDict")
         self.reach = sim.pipeline.support_radius
+        #: ghosts are made within the list radius, for particles projecting within the skin
+        self.build_reach = max(sim.cells.cell_size, self.reach)
+        self.margin = self.build_reach - self.reach
         self.seg = gh.segment_array(sim.segments)
         self.corners = gh.corner_pairs(sim.segments, 1e-9 * max(1.0, self.reach))
         self._ghost = None
+        self._active = None
         self.pushed_back = 0
 
     def before_neighbours(self, sim):
@@ -244,21 +257,23 @@ class MirrorGhosts(Boundary):
         outside the cell grid are dropped (their particle is at the edge)."""
         st = sim.state
         count = np.zeros(st.n, dtype=np.int64)
-        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
+        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.build_reach, count,
+                        self.margin)
         offset = np.zeros(st.n, dtype=np.int64)
         np.cumsum(count[:-1], out=offset[1:])
         ng = int(count.sum())
         src = np.empty(ng, dtype=np.int64)
         s1 = np.empty(ng, dtype=np.int64)
         s2 = np.empty(ng, dtype=np.int64)
-        gh.fill_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, offset, src,
-                       s1, s2)
+        gh.fill_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.build_reach, offset,
+                       src, s1, s2, self.margin)
         n0 = st.n
         st.append(np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng),
                   np.zeros(ng), np.full(ng, GHOST), -1 - st.id[src])
         gidx = np.arange(n0, n0 + ng)
+        active = np.ones(ng, dtype=np.bool_)
         gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2, self.seg,
-                          self.coeffs.noSlip)
+                          self.coeffs.noSlip, active)
         gcell, gout = sim.cells.bin(st.x[n0:], st.y[n0:])
         if gout:
             keep = np.concatenate([np.ones(n0, dtype=bool), gcell >= 0])
@@ -266,7 +281,10 @@ class MirrorGhosts(Boundary):
             kg = gcell >= 0
             gcell = gcell[kg]
             gidx, src, s1, s2 = np.arange(n0, n0 + int(kg.sum())), src[kg], s1[kg], s2[kg]
+        self._active = np.empty(src.shape[0], dtype=np.bool_)
+        gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
         self._ghost = (gidx, src, s1, s2)
+        self.before_evaluation(sim)          # dormant ghosts: mass 0
         return gcell
 
     def after_sort(self, sim, order):
@@ -275,12 +293,31 @@ class MirrorGhosts(Boundary):
         gidx, src, s1, s2 = self._ghost
         self._ghost = (inv[gidx], inv[src], s1, s2)
 
+    def keeps_neighbours(self, sim) -> bool:
+        """Whether the ghosts of the last build still serve this step (see above): the
+        active ones are exactly those a rebuild would make, and no dormant one is within
+        the support of a fluid particle. Sets which ghosts are active for this step."""
+        if self._ghost is None:
+            return False
+        st = sim.state
+        gidx, src, s1, s2 = self._ghost
+        n_on = gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
+        count = np.zeros(st.n, dtype=np.int64)
+        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
+        if int(count.sum()) != n_on:
+            return False
+        self.before_evaluation(sim)
+        nb_start, nb_idx = sim._nb
+        return not gh.dormant_ghost_near_fluid(st.x, st.y, st.kind, gidx, self._active,
+                                               nb_start, nb_idx,
+                                               self.reach ** 2 * (1.0 + 1e-12))
+
     def before_evaluation(self, sim):
         if self._ghost is not None:
             st = sim.state
             gidx, src, s1, s2 = self._ghost
             gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
-                              self.seg, self.coeffs.noSlip)
+                              self.seg, self.coeffs.noSlip, self._active)
 
     def walls_moved(self, sim, offsets, velocities):
         self.seg = gh.segment_array(sim.segments, offsets, velocities)

@@ -17,45 +17,47 @@ _JIT = dict(cache=True, fastmath=set(FASTMATH))
 
 
 @njit(**_JIT, inline="always")
-def _near(xa, ya, seg, s, reach):
+def _near(xa, ya, seg, s, reach, margin=0.0):
+    """Particle (xa, ya) is on the fluid side of segment ``s``, closer than ``reach`` and
+    projecting onto it (extended by ``margin`` at both ends)."""
     rx = xa - seg[s, 0]
     ry = ya - seg[s, 1]
     t = rx * seg[s, 2] + ry * seg[s, 3]
     d = rx * seg[s, 4] + ry * seg[s, 5]
-    return d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]
+    return d > 0.0 and d < reach and t >= -margin and t <= seg[s, 6] + margin
 
 
 @njit(parallel=True, **_JIT)
-def count_ghosts(x, y, kind, seg, corners, reach, count):
+def count_ghosts(x, y, kind, seg, corners, reach, count, margin=0.0):
     for a in prange(x.shape[0]):
         k = 0
         if kind[a] == 0:
             for s in range(seg.shape[0]):
-                if _near(x[a], y[a], seg, s, reach):
+                if _near(x[a], y[a], seg, s, reach, margin):
                     k += 1
             for c in range(corners.shape[0]):
-                if _near(x[a], y[a], seg, corners[c, 0], reach) and \
-                        _near(x[a], y[a], seg, corners[c, 1], reach):
+                if _near(x[a], y[a], seg, corners[c, 0], reach, margin) and \
+                        _near(x[a], y[a], seg, corners[c, 1], reach, margin):
                     k += 1
         count[a] = k
 
 
 @njit(parallel=True, **_JIT)
-def fill_ghosts(x, y, kind, seg, corners, reach, offset, src, s1, s2):
+def fill_ghosts(x, y, kind, seg, corners, reach, offset, src, s1, s2, margin=0.0):
     """Ghost j mirrors particle ``src[j]`` across segment ``s1[j]`` (and ``s2[j]`` >= 0)."""
     for a in prange(x.shape[0]):
         if kind[a] != 0:
             continue
         j = offset[a]
         for s in range(seg.shape[0]):
-            if _near(x[a], y[a], seg, s, reach):
+            if _near(x[a], y[a], seg, s, reach, margin):
                 src[j] = a
                 s1[j] = s
                 s2[j] = -1
                 j += 1
         for c in range(corners.shape[0]):
-            if _near(x[a], y[a], seg, corners[c, 0], reach) and \
-                    _near(x[a], y[a], seg, corners[c, 1], reach):
+            if _near(x[a], y[a], seg, corners[c, 0], reach, margin) and \
+                    _near(x[a], y[a], seg, corners[c, 1], reach, margin):
                 src[j] = a
                 s1[j] = corners[c, 0]
                 s2[j] = corners[c, 1]
@@ -105,9 +107,11 @@ def _reflect_velocity(u, v, seg, s, no_slip):
 
 
 @njit(parallel=True, **_JIT)
-def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip):
+def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip, active):
     """Position, velocity, density (p_G = p_a, T(3.80)) and mass of every ghost from its
-    particle's current state."""
+    particle's current state. A ghost with ``active[j]`` False is *dormant*: it gets mass 0,
+    so that every mass-weighted sum over it adds exactly 0.0 (ghosts are kept between
+    rebuilds of the neighbour list: ``MirrorGhosts.keeps_neighbours``)."""
     for j in prange(gidx.shape[0]):
         g = gidx[j]
         a = src[j]
@@ -126,7 +130,42 @@ def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip):
         u[g] = gu
         v[g] = gv
         rho[g] = rho[a]
-        m[g] = m[a]
+        m[g] = m[a] if active[j] else 0.0
+
+
+@njit(parallel=True, **_JIT)
+def ghost_activity(x, y, src, s1, s2, seg, reach, active):
+    """``active[j]``: the particle of ghost j is now within ``reach`` of its segment(s),
+    projecting onto them (the criterion a ghost is made by, T(3.77)); returns how many are."""
+    n_on = 0
+    for j in prange(src.shape[0]):
+        a = src[j]
+        on = _near(x[a], y[a], seg, s1[j], reach) and \
+            (s2[j] < 0 or _near(x[a], y[a], seg, s2[j], reach))
+        active[j] = on
+        if on:
+            n_on += 1
+    return n_on
+
+
+@njit(parallel=True, **_JIT)
+def dormant_ghost_near_fluid(x, y, kind, gidx, active, nb_start, nb_idx, support2):
+    """Whether a dormant ghost has a fluid neighbour within the support (possible only where
+    the walls are not convex: it would enter that particle's sums that are not weighted by
+    mass, e.g. T(3.89))."""
+    bad = 0
+    for j in prange(gidx.shape[0]):
+        g = gidx[j]
+        if active[j]:
+            continue
+        for k in range(nb_start[g], nb_start[g + 1]):
+            b = nb_idx[k]
+            if kind[b] == 0:
+                dx = x[g] - x[b]
+                dy = y[g] - y[b]
+                if dx * dx + dy * dy < support2:
+                    bad += 1
+    return bad > 0
 
 
 def segment_array(segments, offsets=None, velocities=None) -> np.ndarray:

@@ -1,0 +1,219 @@
+"""Speed work of issue 12 that must not change results: the working precision
+(``sphSchemes`` ``precision``), mirror ghosts kept with the Verlet neighbour list, and no
+allocation in the step loop while the list is reused."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from sphfoam import runner
+from sphfoam.case.case import Case
+from sphfoam.engine.state import GHOST, ParticleState
+from sphfoam.io.fields import read_state
+
+
+def _sim(tutorial, name, edits):
+    d = tutorial(name, dict({"system/controlDict:functions": {}}, **edits))
+    case = Case(d)
+    runner.setup_case(case, log=lambda *_: None)
+    return runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+
+
+def _real(sim):
+    st = sim.state
+    real = st.kind != GHOST
+    order = np.argsort(st.id[real], kind="stable")
+    return {k: np.asarray(getattr(st, k)[real][order], dtype=np.float64)
+            for k in ("x", "y", "u", "v", "rho")}
+
+
+# --- precision ---------------------------------------------------------------------------
+def test_single_precision_compiles_float32_loops_and_keeps_a_hydrostatic_tank(tutorial):
+    """``precision single``: the state (but positions), aux and coefficients are float32, the
+    compiled rates take float32 arrays and accumulate in float32; 40 steps of the hydrostatic
+    tank stay within 1e-4 dx (positions) and 1e-5 rho0 (density) of the double run."""
+    runs = {}
+    for prec in ("double", "single"):
+        sim = _sim(tutorial, "hydrostaticTank", {"system/particleDict:dx": 0.025,
+                                                 "system/sphSchemes:precision": prec})
+        for _ in range(40):
+            sim.step()
+        runs[prec] = (sim, _real(sim))
+    sim, single = runs["single"]
+    st = sim.state
+    f4 = np.dtype(np.float32)
+    assert st.x.dtype == st.y.dtype == np.float64            # positions stay double
+    assert all(getattr(st, k).dtype == f4 for k in ("u", "v", "rho", "m", "p", "c", "ax",
+                                                   "drho", "sigma"))
+    assert sim.prm.dtype == f4 and sim.aux.dtype == f4
+    mod = sim.pipeline.module
+    assert "precision=single" in sim.pipeline.selection.describe()
+    (sig,) = mod.rates.signatures
+    assert str(sig[0]) == "array(float64, 1d, C)" and str(sig[2]) == "array(float32, 1d, C)"
+    assert str(sig[11]) == "array(float32, 1d, C)"           # prm
+    src = sim.pipeline.source_path.read_text()
+    assert "dx_ab = F4(xa - x[b])" in src and "acc_x = F4(0.0)" in src
+    assert _local_types(sim, "rates", ("acc_x", "drho_a", "r2", "q", "fw", "pterm")) == \
+        {"float32"}                                         # no promotion back to float64
+    dsim, double = runs["double"]
+    assert dsim.state.u.dtype == np.float64 and dsim.prm.dtype == np.float64
+    assert "F4(" not in dsim.pipeline.source_path.read_text()
+    dx, rho0 = 0.025, 1000.0
+    for k in ("x", "y"):
+        assert np.max(np.abs(single[k] - double[k])) < 1e-4 * dx
+    assert np.max(np.abs(single["rho"] - double["rho"])) < 1e-5 * rho0
+    assert 0 < np.max(np.abs(single["rho"] - double["rho"]))  # it did run in float32
+    fields = st.to_fields(p=st.p)
+    assert fields["rho"].dtype == fields["U"].dtype == np.float64   # written as double
+
+
+def _local_types(sim, func, names):
+    """numba's types of the locals ``names`` of the generated ``func``, compiled serially
+    (the parallel loop body is outlined, out of reach of inspect_types)."""
+    import importlib.util
+    import io
+    import re
+
+    src = sim.pipeline.source_path.read_text().replace("parallel=True", "parallel=False")
+    src = src.replace("cache=True", "cache=False").replace("prange(", "range(")
+    path = sim.pipeline.source_path.with_name("serial_check.py")
+    path.write_text(src)
+    spec = importlib.util.spec_from_file_location("sphfoam_serial_check", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    st = sim.state
+    getattr(mod, func)(*sim._grid_args(), st.ax, st.ay, st.drho, st.sigma)
+    out = io.StringIO()
+    getattr(mod, func).inspect_types(file=out)
+    found = set()
+    for m in re.finditer(r"#\s+(\w+)(?:\.\d+)? = .*::\s*(\w+)", out.getvalue()):
+        if m.group(1) in names:
+            found.add(m.group(2))
+    path.unlink()
+    return found
+
+
+def test_a_bad_precision_names_the_file_key_and_choices(tutorial):
+    from sphfoam.case.errors import CaseError
+
+    d = tutorial("hydrostaticTank", {"system/sphSchemes:precision": "half"})
+    with pytest.raises(CaseError) as e:
+        Case(d).schemes
+    msg = str(e.value)
+    assert "sphSchemes" in msg and "precision" in msg and "single" in msg
+
+
+# --- mirror ghosts and the Verlet list ------------------------------------------------------
+def test_mirror_ghosts_keep_the_list_and_give_the_rebuilt_results(tutorial):
+    """A dam break with mirror ghosts stepped with the list reused (ghosts kept, dormant ones
+    of mass 0) and with a new list every step: the same fields to round-off; the reused run
+    did reuse, and at every step its active ghosts are the ghosts T(3.77) makes."""
+    edits = {"system/particleDict:dx": 0.02,
+             "constant/sphProperties:boundary": {"type": "mirrorGhosts", "noSlip": True}}
+    out = {}
+    for reuse in (True, False):
+        sim = _sim(tutorial, "damBreak", edits)
+        sim.reuse_neighbours = reuse
+        bnd = sim.pipeline.selection.boundary
+        for _ in range(120):
+            sim.step()
+            if reuse:
+                st = sim.state
+                count = np.zeros(st.n, dtype=np.int64)
+                from sphfoam.models import mirror as gh
+                gh.count_ghosts(st.x, st.y, st.kind, bnd.seg, bnd.corners, bnd.reach, count)
+                assert int(bnd._active.sum()) == int(count.sum())
+        out[reuse] = (sim.list_built, sim.list_reused, _real(sim))
+    built, reused, a = out[True]
+    assert reused > built > 1
+    assert out[False][1] == 0
+    b = out[False][2]
+    for k in a:
+        scale = np.max(np.abs(b[k])) or 1.0
+        assert np.max(np.abs(a[k] - b[k])) <= 1e-9 * scale, k
+
+
+# --- no allocation in the step loop -----------------------------------------------------------
+def test_no_array_is_allocated_per_step_while_the_list_is_reused(tutorial):
+    """Verlet (one evaluation a step, no density filter): over steps that reuse the neighbour
+    list numpy allocates no particle array (tracemalloc's peak), and what numba's runtime
+    allocates is freed within the step (its parallel launcher's small scheduling arrays, a
+    few per prange region: 49 a step here)."""
+    from numba.core.runtime import _nrt_python as nrt
+    from numba.core.runtime import rtsys
+
+    sim = _sim(tutorial, "damBreak", {"system/particleDict:dx": 0.01,
+                                      "system/sphSchemes:integrator": {"type": "verlet"},
+                                      "constant/sphProperties:densityFilter": {"type": "none"}})
+    for _ in range(3):
+        sim.step()
+    n = sim.state.n
+    built = sim.list_built
+    stats_were_on = nrt.memsys_stats_enabled()
+    nrt.memsys_enable_stats()
+    tracemalloc.start()
+    try:
+        before, _ = tracemalloc.get_traced_memory()
+        tracemalloc.reset_peak()
+        s0 = rtsys.get_allocation_stats()
+        for _ in range(10):
+            sim.step()
+        s1 = rtsys.get_allocation_stats()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+        if not stats_were_on:
+            nrt.memsys_disable_stats()
+    assert sim.list_built == built          # the window reused the list
+    made, freed = s1.alloc - s0.alloc, s1.free - s0.free
+    assert made == freed and made <= 10 * 80      # freed in the step; a few per region
+    assert n > 1500 and peak - before < 4 * n     # not one float array of the particles
+
+
+# --- the per-pair cache of kernel values ------------------------------------------------------
+def test_the_pair_cache_gives_the_uncached_rates_bit_for_bit(tutorial, monkeypatch):
+    """With a prepass (XSPH) every particle walks its list before the rates: it stores the
+    kernel gradient factor per listed pair and the rates and density loops read it. The
+    rates, sigma and drho/dt equal those of the same selection generated without the cache."""
+    from sphfoam.engine import codegen
+    from sphfoam.engine.terms import ContractError, Term
+
+    d = tutorial("damBreak", {"system/particleDict:dx": 0.02,
+                              "system/controlDict:functions": {},
+                              "constant/sphProperties:velocityCorrection": {"type": "xsph"}})
+    case = Case(d)
+    runner.setup_case(case, log=lambda *_: None)
+    sim = runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+    for _ in range(30):
+        sim.step()
+    pipe = sim.pipeline
+    assert "fw" in pipe.pair_cache
+    src = pipe.source_path.read_text()
+    assert "pc[J_fw, k] = fw" in src and "fw = pc[J_fw, k]" in src
+    st = sim.state
+    sim.eos()
+    sim.rates()
+    cached = [a.copy() for a in (st.ax, st.ay, st.drho, st.sigma)]
+    sim.density_rate()
+    cached.append(st.drho.copy())
+
+    monkeypatch.setattr(codegen.Assembly, "_pair_cache", lambda self: [])
+    plain = codegen.build_pipeline(pipe.selection, case.context, pipe.core)
+    assert plain.pair_cache == () and "pc[" not in plain.source_path.read_text()
+    args = sim._grid_args()[:-1]                       # without the cache
+    out = [np.zeros(st.n) for _ in range(4)]
+    plain.prepass(*args)
+    plain.rates(*args, *out)
+    drho = np.zeros(st.n)
+    plain.prepass(*args)
+    plain.density_rate(*args, drho)
+    for got, want in zip(cached, out + [drho]):
+        assert np.array_equal(got, want)
+
+    with pytest.raises(ContractError, match="does not define"):
+        from sphfoam.engine import terms as T
+        T.check([Term("bad", ("rates",), pair="x = 1", writes=("W",), cache=("Wab",))],
+                set(), {})
