@@ -1,0 +1,225 @@
+"""A wave breaking on a beach (T ch. 5): breakingPoint, surfaceProfiles, the shoreline of
+runUp mode beach and their metrics on synthetic particle sets with known answers."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from sphfoam import registry
+from sphfoam.case.foamdict import parse
+from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.models.base import CaseContext
+from sphfoam.models.kernels import WendlandC2
+from sphfoam.sampling import beach
+
+DX = 0.02
+D = 0.5          # still level
+
+
+class FakeSim:
+    def __init__(self, x, y, u=None, time=0.0, kind=None):
+        n = len(x)
+        z = np.zeros(n)
+        self.state = ParticleState(np.asarray(x, float), np.asarray(y, float),
+                                   z.copy() if u is None else np.asarray(u, float), z.copy(),
+                                   np.full(n, 1000.0), np.full(n, 1000.0 * DX * DX),
+                                   np.full(n, FLUID) if kind is None else kind)
+        self.time = time
+
+
+def fake_case(tmp_path):
+    kernel = WendlandC2()
+    case = SimpleNamespace(path=tmp_path, models=SimpleNamespace(sph={"kernel": kernel}),
+                           control=SimpleNamespace(timePrecision=6))
+    ctx = CaseContext(dx=DX, h=1.3 * DX, rho0=1000.0, nu=1e-6, g=(0.0, -9.81),
+                      fluid_height=D)
+    return case, ctx
+
+
+def build(text, name="fo", family="functionObject"):
+    fo = registry.build(family, parse(text))
+    fo.object_name = name
+    return fo
+
+
+def wave(x_crest, height, face, length=8.0, lean=0.0):
+    """Particles on a dx lattice under a surface: still level D, a crest plateau of
+    ``height`` over the 0.4 m behind x_crest, a back slope 1:4 and a front face at
+    ``face`` degrees to the horizontal ahead of it (``lean`` > 0: the front overhangs, the
+    face x = x_crest + (y - D) lean for y above D). Column tops are the cell tops."""
+    xc = (np.arange(int(round(length / DX))) + 0.5) * DX
+    yc = (np.arange(int((D + height) / DX) + 2) + 0.5) * DX
+    X, Y = (a.ravel() for a in np.meshgrid(xc, yc))
+    top = D + height
+    back = top - (x_crest - 0.4 - X) / 4.0
+    if lean > 0:
+        front_x = x_crest + (Y - D) * lean
+        inside = np.where(X <= x_crest, Y + DX / 2 <= np.minimum(top, back),
+                          (Y + DX / 2 <= top) & (X <= front_x))
+        inside |= Y + DX / 2 <= D
+    else:
+        t = math.tan(math.radians(face))
+        front = top - (X - x_crest) * t
+        surf = np.maximum(np.minimum(np.minimum(top, back), front), D)
+        inside = Y + DX / 2 <= surf + 1e-9
+    return X[inside], Y[inside]
+
+
+# --- the front face ----------------------------------------------------------------------------
+@pytest.mark.parametrize("angle", [20.0, 45.0, 60.0, 70.0, 80.0])
+def test_face_angle_of_a_known_front(angle):
+    """A straight front face at a known angle, 15 dx high: recovered within 5 degrees (the
+    lattice quantises each front to dx: the face's 0.12 m between 0.5 and 0.9 of the crest
+    spans 6 dx, and a steep face only 1-2 dx across)."""
+    H = 0.3
+    x, y = wave(4.0, H, angle)
+    levels = np.arange(D + 0.5 * H, D + 0.9 * H + 1e-9, DX / 2)
+    fronts = beach.face_fronts(x, y + DX / 2, levels, 3.9, DX)
+    assert np.isfinite(fronts).all()
+    assert beach.face_angle(levels, fronts) == pytest.approx(angle, abs=5.0)
+
+
+def test_vertical_and_overhanging_fronts():
+    x, y = wave(4.0, 0.15, 90.0)
+    levels = np.linspace(D + 0.075, D + 0.135, 7)
+    vertical = beach.face_angle(levels, beach.face_fronts(x, y + DX / 2, levels, 3.9, DX))
+    assert vertical == pytest.approx(90.0, abs=1e-9)
+    x, y = wave(4.0, 0.3, 0.0, lean=0.5)             # the top 0.5 dx per dx of height ahead
+    levels = np.arange(D + 0.15, D + 0.27 + 1e-9, DX / 2)
+    over = beach.face_angle(levels, beach.face_fronts(x, y + DX / 2, levels, 3.9, DX))
+    assert over == pytest.approx(90.0 + math.degrees(math.atan(0.5)), abs=5.0)
+
+
+def test_face_walk_stops_at_a_gap():
+    """Water further ahead at the same height (a splash, the shoreline) is not the face."""
+    x, y = wave(4.0, 0.15, 45.0)
+    xs, ys = np.append(x, [5.0, 5.0 + DX]), np.append(y, [D + 0.1, D + 0.1])
+    f = beach.face_fronts(xs, ys + DX / 2, [D + 0.1], 3.9, DX)[0]
+    assert 4.0 < f < 4.2
+
+
+# --- breakingPoint -------------------------------------------------------------------------------
+def test_breaking_point_geometric_and_kinematic(tmp_path):
+    """A wave travelling at c = 2 m/s whose front steepens 30 -> 60 -> 90 degrees: the
+    geometric breaking point is the first vertical front, with its time from the crest
+    passing the toe gauge; the crest particles reach u = 1.5 c a sample later (the crest
+    celerity, from the vertex of the flat synthetic crest over 0.2 s, is within 15 %)."""
+    case, ctx = fake_case(tmp_path)
+    fo = build("type breakingPoint; xMin 1; xMax 7.5; still 0.5; toe 2.5; "
+               "celerityWindow 0.2; minHeight 0.05;")
+    fo.start(case, ctx, "0")
+    c = 2.0
+    faces = [30, 30, 45, 60, 75, 90, 90, 90]
+    for k, face in enumerate(faces):
+        t = 0.1 * k
+        xcr = 2.0 + c * t
+        x, y = wave(xcr, 0.15, face)
+        u = np.where(y > D + 0.12, (0.5 if k < 6 else 1.5) * c, 0.0)
+        fo.execute(FakeSim(x, y, u, time=t))
+    fo.end()
+    rows = beach.read_breaking(tmp_path / "postProcessing/fo/0/breaking.dat")
+    assert list(rows) == ["geometric", "kinematic"]
+    g, kin = rows["geometric"], rows["kinematic"]
+    assert g["time"] == pytest.approx(0.5)
+    assert g["x"] == pytest.approx(2.0 + c * 0.5, abs=2 * DX)          # the face
+    # crest (the plateau's parabola vertex, 0.2 m behind x_crest) passes 2.5 m at ~0.35 s
+    assert g["tToe"] == pytest.approx((2.5 - 2.0 + 0.2) / c, abs=0.03)
+    assert g["toeToBreaking"] == pytest.approx(g["time"] - g["tToe"], abs=1e-9)
+    assert kin["time"] == pytest.approx(0.6)
+    data = np.loadtxt(tmp_path / "postProcessing/fo/0/fo.dat", ndmin=2)
+    assert data.shape == (len(faces), 8)
+    np.testing.assert_allclose(data[2:, 6], c, rtol=0.15)                # celerity
+    assert np.isnan(data[:2, 6]).all()                 # less than celerityWindow of data
+    assert data[0, 4] == pytest.approx(30.0, abs=4.0)
+
+
+def test_breaking_point_not_found_and_checks(tmp_path):
+    case, ctx = fake_case(tmp_path)
+    fo = build("type breakingPoint; xMin 1; xMax 7.5; still 0.5;")
+    fo.start(case, ctx, "0")
+    x, y = wave(3.0, 0.15, 30)
+    fo.execute(FakeSim(x, y, time=0.0))
+    fo.end()
+    rows = beach.read_breaking(tmp_path / "postProcessing/fo/0/breaking.dat")
+    assert math.isnan(rows["geometric"]["time"]) and math.isnan(rows["kinematic"]["time"])
+    with pytest.raises(Exception, match="xMax"):
+        build("type breakingPoint; xMin 2; xMax 1;")
+    with pytest.raises(Exception, match="faceTo"):
+        build("type breakingPoint; xMin 1; xMax 2; faceFrom 0.8; faceTo 0.6;")
+
+
+# --- surfaceProfiles -------------------------------------------------------------------------------
+def test_surface_profiles_write_the_known_surface(tmp_path):
+    case, ctx = fake_case(tmp_path)
+    fo = build("type surfaceProfiles; times (0.5 1); xMin 2; xMax 6; still 0.5;")
+    fo.start(case, ctx, "0")
+    x, y = wave(4.0, 0.15, 45.0)
+    walls_x = np.arange(0, 8, DX)
+    xs = np.concatenate([x, walls_x])
+    ys = np.concatenate([y, np.full(walls_x.size, -DX / 2)])
+    kind = np.concatenate([np.full(x.size, FLUID), np.full(walls_x.size, WALL)])
+    for t in (0.2, 0.52, 0.7, 1.3):
+        fo.execute(FakeSim(xs, ys, time=t, kind=kind)) if fo.due(
+            FakeSim(xs, ys, time=t, kind=kind), False) else None
+    fo.end()
+    folders = sorted(p.name for p in (tmp_path / "postProcessing/fo/0").iterdir() if p.is_dir())
+    assert folders == ["0.52", "1.3"]
+    prof = np.loadtxt(tmp_path / "postProcessing/fo/0/0.52/profile.dat")
+    gx, eta = prof[:, 0], prof[:, 1]
+    assert gx[0] == pytest.approx(2.0) and gx[-1] == pytest.approx(6.0)
+    assert np.diff(gx) == pytest.approx(DX / 2)
+    exact = np.maximum(np.minimum(np.minimum(0.15, 0.15 - (3.6 - gx) / 4),
+                                  0.15 - (gx - 4.0)), 0.0)
+    assert np.abs(eta - exact).max() <= DX + 1e-9                  # lattice: within dx
+    assert np.abs(eta - exact).mean() <= DX / 2
+    part = np.loadtxt(tmp_path / "postProcessing/fo/0/0.52/particles.dat")
+    assert part.shape == (int(((x >= 2) & (x <= 6)).sum()), 5)     # fluid only
+    assert (tmp_path / "postProcessing/fo/0/0.52/profile.png").stat().st_size > 1000
+    rows = np.loadtxt(tmp_path / "postProcessing/fo/0/fo.dat", ndmin=2)
+    np.testing.assert_allclose(rows[:, :2], [[0.52, 0.5], [1.3, 1.0]])
+
+
+# --- the shoreline and the metrics ---------------------------------------------------------------
+def test_beach_shoreline_x_and_metrics(tmp_path):
+    from sphfoam.case.metrics_dict import evaluate_metrics
+
+    case, ctx = fake_case(tmp_path)
+    a = math.radians(5.0)
+    ru = build(f"type runUp; mode beach; start (5 0); angle 5; still {D};", name="shore")
+    ru.start(case, ctx, "0")
+    for t, xs in ((0.0, 10.7), (1.0, 12.0), (2.0, 11.0)):
+        # a water layer on the slope up to x = xs
+        px = np.arange(5.0, xs, DX)
+        py = (px - 5.0) * math.tan(a) + DX / 2
+        py = np.where(py < D, D - DX / 2, py)
+        ru.execute(FakeSim(px, py, time=t))
+    ru.end()
+    data = np.loadtxt(tmp_path / "postProcessing/shore/0/shore.dat", ndmin=2)
+    assert data.shape[1] == 5
+    assert data[1, 3] == pytest.approx(12.0, abs=DX)
+    assert data[2, 4] == pytest.approx(12.0, abs=DX)                  # x at the maximum
+    assert data[1, 1] == pytest.approx(7.0 * math.tan(a) + DX - D, abs=2 * DX)
+
+    bp = build("type breakingPoint; xMin 1; xMax 7.5; still 0.5; toe 2.5;", name="breaking")
+    bp.start(case, ctx, "0")
+    bp.found["geometric"] = (3.0, 9.0, 0.2)
+    bp.samples = [(0.0, 2.0), (1.0, 3.0)]
+    bp.end()
+    spec = {"R": {"type": "runUp", "function": "shore", "reference": 0.4},
+            "xR": {"type": "runUpPosition", "function": "shore", "reference": 10.43,
+                   "origin": 5.0},
+            "tR": {"type": "runUpPosition", "function": "shore", "quantity": "time"},
+            "tb": {"type": "breakingTime", "function": "breaking", "reference": 1.96},
+            "xb": {"type": "breakingTime", "function": "breaking", "quantity": "x"},
+            "kb": {"type": "breakingTime", "function": "breaking", "criterion": "kinematic"}}
+    vals = evaluate_metrics(tmp_path, spec, strict=False)
+    assert vals["xR"].value == pytest.approx(7.0, abs=DX)
+    assert vals["xR"].error == pytest.approx(100 * (vals["xR"].value - 10.43) / 10.43)
+    assert vals["tR"].value == 1.0 and vals["tR"].unit == "s"
+    assert vals["tb"].value == pytest.approx(3.0 - 0.5)               # toe passed at 0.5 s
+    assert vals["xb"].value == 9.0 and vals["xb"].unit == "m"
+    assert math.isnan(vals["kb"].value) and "kinematic" in vals["kb"].problem
