@@ -121,7 +121,7 @@ def test_breaking_point_geometric_and_kinematic(tmp_path):
         u = np.where(y > D + 0.12, (0.5 if k < 6 else 1.5) * c, 0.0)
         fo.execute(FakeSim(x, y, u, time=t))
     fo.end()
-    rows = beach.read_breaking(tmp_path / "postProcessing/fo/0/breaking.dat")
+    rows = beach.read_breaking(tmp_path / "postProcessing/fo/0/summary.dat")
     assert list(rows) == ["geometric", "kinematic"]
     g, kin = rows["geometric"], rows["kinematic"]
     assert g["time"] == pytest.approx(0.5)
@@ -144,7 +144,7 @@ def test_breaking_point_not_found_and_checks(tmp_path):
     x, y = wave(3.0, 0.15, 30)
     fo.execute(FakeSim(x, y, time=0.0))
     fo.end()
-    rows = beach.read_breaking(tmp_path / "postProcessing/fo/0/breaking.dat")
+    rows = beach.read_breaking(tmp_path / "postProcessing/fo/0/summary.dat")
     assert math.isnan(rows["geometric"]["time"]) and math.isnan(rows["kinematic"]["time"])
     with pytest.raises(Exception, match="xMax"):
         build("type breakingPoint; xMin 2; xMax 1;")
@@ -162,9 +162,10 @@ def test_surface_profiles_write_the_known_surface(tmp_path):
     xs = np.concatenate([x, walls_x])
     ys = np.concatenate([y, np.full(walls_x.size, -DX / 2)])
     kind = np.concatenate([np.full(x.size, FLUID), np.full(walls_x.size, WALL)])
-    for t in (0.2, 0.52, 0.7, 1.3):
-        fo.execute(FakeSim(xs, ys, time=t, kind=kind)) if fo.due(
-            FakeSim(xs, ys, time=t, kind=kind), False) else None
+    for t in (0.2, 0.52, 0.7, 1.3):            # as `sphfoam sample` does: every time
+        sim = FakeSim(xs, ys, time=t, kind=kind)
+        assert fo.due(sim, False) == (t in (0.52, 1.3))
+        fo.execute(sim)
     fo.end()
     folders = sorted(p.name for p in (tmp_path / "postProcessing/fo/0").iterdir() if p.is_dir())
     assert folders == ["0.52", "1.3"]
@@ -223,3 +224,68 @@ def test_beach_shoreline_x_and_metrics(tmp_path):
     assert vals["tb"].value == pytest.approx(3.0 - 0.5)               # toe passed at 0.5 s
     assert vals["xb"].value == 9.0 and vals["xb"].unit == "m"
     assert math.isnan(vals["kb"].value) and "kinematic" in vals["kb"].problem
+
+
+# --- the tutorial, end to end at a tiny resolution ---------------------------------------------
+def test_coarse_beach_case_breaks_and_runs_up(tutorial):
+    """tutorials/solitaryBeach scaled down to run in seconds: d = 0.1 m, d/dx = 5, a steeper
+    wave (H/d = 0.5 from the Goring paddle, 0.5 m before the toe) on the 5° beach, which
+    plunges (Grilli's slope parameter S0 = 1.521 tan(5°)/sqrt(H/d) = 0.19, plunging for
+    0.025 < S0 < 0.3). The breaking point is found past the toe and before the maximum
+    run-up, the run-up is written and positive, and the tutorial's metrics evaluate."""
+    from sphfoam.case.metrics_dict import evaluate_metrics
+    from sphfoam.runner import run_case
+
+    d, dx, toe = 0.1, 0.02, 0.5
+    length = 0.4 / math.sin(math.radians(5.0))
+    edits = {
+        "system/particleDict:dx": dx,
+        "system/particleDict:fluid": {
+            "water": {"type": "polygon", "points": [[0.0, 0.0], [toe, 0.0],
+                                                    [toe + d / math.tan(math.radians(5)), d],
+                                                    [0.0, d]]}},
+        "system/particleDict:walls.bed.points": [[-0.3, 0.0], [toe, 0.0]],
+        "system/particleDict:walls.beach.start": [toe, 0.0],
+        "system/particleDict:walls.beach.length": length,
+        "system/particleDict:walls.paddle.points": [[0.0, 0.4], [0.0, 0.0]],
+        "system/particleDict:walls.paddle.motion.waveMaker.height": 0.5 * d,
+        "system/particleDict:walls.paddle.motion.waveMaker.depth": d,
+        "constant/sphProperties:equationOfState.vmax": math.sqrt(9.81 * 1.5 * d),
+        "system/controlDict:endTime": 2.5,
+        "system/controlDict:writeInterval": 1.25,
+        "system/controlDict:functions.toe.x": [toe - 0.15],
+        "system/controlDict:functions.toe.still": d,
+        "system/controlDict:functions.breaking.xMin": 0.3,
+        "system/controlDict:functions.breaking.xMax": toe + length,
+        "system/controlDict:functions.breaking.still": d,
+        "system/controlDict:functions.breaking.toe": toe - 0.15,
+        "system/controlDict:functions.breaking.after": toe,
+        "system/controlDict:functions.breaking.minHeight": 0.02,
+        "system/controlDict:functions.shoreline.start": [toe, 0.0],
+        "system/controlDict:functions.shoreline.length": length,
+        "system/controlDict:functions.shoreline.still": d,
+        "system/controlDict:functions.profiles.times": [1.0],
+        "system/controlDict:functions.profiles.xMin": toe,
+        "system/controlDict:functions.profiles.xMax": toe + 2.0,
+        "system/controlDict:functions.profiles.yMin": 0.0,
+        "system/controlDict:functions.profiles.yMax": 0.3,
+        "system/controlDict:functions.profiles.still": d,
+        "system/controlDict:functions.profiles.plot": False,
+        "system/metricsDict:metrics.toeHeight.x": toe - 0.15,
+        "system/metricsDict:metrics.toeHeight.reference": 0.5 * d,
+    }
+    case = tutorial("solitaryBeach", edits)
+    run_case(case, progress=False, echo=None)
+    pp = case / "postProcessing"
+    rows = beach.read_breaking(pp / "breaking/0/summary.dat")
+    g = rows["geometric"]
+    shore = np.loadtxt(pp / "shoreline/0/shoreline.dat", ndmin=2)
+    i = int(np.nanargmax(shore[:, 1]))
+    assert shore[i, 1] > 0.02                              # the tongue ran up the beach
+    assert toe < g["x"] < shore[i, 4]                      # breaks past the toe, below it
+    assert g["tToe"] < g["time"] < shore[i, 0]
+    assert [p.parent.name[:3] for p in (pp / "profiles/0").glob("*/profile.dat")] == ["1.0"]
+    vals = evaluate_metrics(case, strict=False)
+    assert vals["runUp"].value == pytest.approx(shore[i, 1])
+    assert vals["breakingTime"].value == pytest.approx(g["toeToBreaking"])
+    assert 0 < vals["toeHeight"].value < 0.07

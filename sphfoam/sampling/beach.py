@@ -114,7 +114,7 @@ class BreakingPoint(FunctionObject):
     eta_c >= ``minHeight`` and x_c >= ``after`` count.
 
     Output: ``<name>.dat`` (time, x_c, eta_c, face x, face angle, u of the crest, c, u/c) and
-    ``breaking.dat``, written when the wave breaks and at the end: its time and x (the face's
+    ``summary.dat``, written when the wave breaks and at the end: its time and x (the face's
     top for geometric, the fastest particle for kinematic), eta_c, the time the crest passed
     ``toe`` (interpolated) and the time from there to breaking (T: 1.96 s in the laboratory,
     T §5.5.1), for both criteria.
@@ -167,7 +167,7 @@ class BreakingPoint(FunctionObject):
         super().start(case, ctx, start_time_name)
         self.samples: list[tuple[float, float]] = []      # (t, x_c)
         self.found: dict[str, tuple[float, float, float]] = {}
-        self.summary_file = self.folder / "breaking.dat"
+        self.summary_file = self.folder / "summary.dat"
 
     # --- one sample ---------------------------------------------------------------------
     def measure(self, xf, yf, uf, time):
@@ -263,7 +263,8 @@ class BreakingPoint(FunctionObject):
 
 
 def read_breaking(path) -> dict[str, dict[str, float]]:
-    """The rows of a ``breaking.dat``: {criterion: {column: value}} (first row first)."""
+    """The rows of a breakingPoint's ``summary.dat``: {criterion: {column: value}} (first
+    row first)."""
     out: dict[str, dict[str, float]] = {}
     cols = None
     for line in open(path):
@@ -345,9 +346,9 @@ class SurfaceProfiles(FunctionObject):
         return bool(self.pending) and sim.time >= self.pending[0] - 1e-9 * max(1, sim.time)
 
     def execute(self, sim):
-        if not self.pending:
-            return
         eps = 1e-9 * max(1.0, sim.time)
+        if not self.pending or sim.time < self.pending[0] - eps:
+            return                               # (sphfoam sample executes every time)
         requested = self.pending.pop(0)
         while self.pending and sim.time >= self.pending[0] - eps:
             self.pending.pop(0)
@@ -432,7 +433,7 @@ class SurfaceProfiles(FunctionObject):
 @register
 class BreakingTime(Metric):
     """Time from the crest passing the toe gauge to the breaking point, or the breaking time
-    itself, of a ``breakingPoint`` function object (its ``breaking.dat``), against a given
+    itself, of a ``breakingPoint`` function object (its ``summary.dat``), against a given
     value (T §5.5.1: 1.96 s in the laboratory, 2.06 s by the thesis's SPH)."""
 
     name = "breakingTime"
@@ -455,7 +456,7 @@ class BreakingTime(Metric):
 
     def measure(self, case_path, spec):
         folders = self.folders(case_path)
-        path = folders[-1][1] / "breaking.dat"
+        path = folders[-1][1] / "summary.dat"
         rel = self._rel(path, case_path)
         if not path.is_file():
             self.fail("function", f"{rel} not found: the function object "
