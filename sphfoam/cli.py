@@ -262,6 +262,11 @@ def check(case: Path = typer.Argument(Path("."), help="case directory, or a stud
     t.add_row("dx, h, c0", f"{ctx.dx:g} m, {ctx.h:g} m, {ctx.c0:.4g} m/s", "")
     t.add_row("time", f"0 .. {c.control.endTime:g} s, write every {c.control.writeInterval:g} "
               f"({c.control.writeControl})", "")
+    for name, r in c.particles.fluid.items():
+        if getattr(r, "grid", None) is not None:    # a rotated lattice (particles on a slope)
+            t.add_row("fluid", escape_(f"{name} ({r.type})"),
+                      escape_(f"grid at {r.grid.angle:g} deg from {tuple(r.grid.origin)}; "
+                              f"seam minSpacing {c.particles.minSpacing:g} dx"))
     if rep.metrics is not None:
         t.add_row("metricsDict", escape_(", ".join(rep.metrics.metrics)), "")
     for name, s in rep.studies.items():

@@ -202,10 +202,39 @@ SPH_FAMILIES: dict[str, str | None] = {
 
 
 # --- system/particleDict -------------------------------------------------------------------
+class Grid(Strict):
+    """The lattice a fluid region is filled on (T §5.3.4, Fig 5.2): square, of spacing dx,
+    with rows at ``angle`` degrees to the +x axis, its cells anchored at ``origin`` (the cell
+    centres sit at origin + (i + 1/2) dx t + (j + 1/2) dx n, t = (cos a, sin a), n = (-sin a,
+    cos a)). Anchored at the toe of a slope and at the slope's angle, the first row lies
+    dx/2 above the slope, parallel to it, as the first row of the usual grid lies dx/2 above
+    a flat bed."""
+
+    origin: Vector2 = Field(description="a corner of the lattice's cells (m), e.g. the toe "
+                            "of the slope")
+    angle: float = Field(0.0, description="degrees of the rows above the +x axis, "
+                         "-45..45 (any square lattice is one of these), e.g. the slope's 5")
+
+    @field_validator("angle")
+    @classmethod
+    def _angle(cls, v):
+        if not -45.0 <= v <= 45.0:
+            raise ValueError(f"angle {v:g} is out of range: give -45..45 degrees (a square "
+                             "lattice rotated by more is the same as one rotated by "
+                             "angle -/+ 90)")
+        return v
+
+
+_GRID_DOC = ("{ origin (x y); angle a; }: fill the region on a lattice rotated by a degrees "
+             "and anchored at origin (particles above a slope, T §5.3.4); default: the usual "
+             "grid anchored at the region's lower-left corner")
+
+
 class BoxRegion(Strict):
     type: Literal["box"]
     min: Vector2
     max: Vector2
+    grid: Grid | None = Field(None, description=_GRID_DOC)
 
     @model_validator(mode="after")
     def _order(self):
@@ -217,6 +246,7 @@ class BoxRegion(Strict):
 class PolygonRegion(Strict):
     type: Literal["polygon"]
     points: list[Vector2] = Field(min_length=3)
+    grid: Grid | None = Field(None, description=_GRID_DOC)
 
 
 FluidRegion = Annotated[BoxRegion | PolygonRegion, Field(discriminator="type")]
@@ -343,6 +373,11 @@ class ParticleDict(Strict):
     dx: float = Field(gt=0, description="initial particle spacing")
     fluid: dict[str, FluidRegion] = Field(min_length=1)
     walls: dict[str, WallRegion] = Field(default_factory=dict)
+    minSpacing: float = Field(0.5, gt=0, le=1, description=(
+        "fluid particles of different regions closer than minSpacing dx are thinned (the "
+        "particle of the later region in the file goes): the seam where the usual grid meets "
+        "a rotated one above a slope (T §5.3.4). Within a region, and between regions that "
+        "touch on the same grid, no two particles are closer than dx"))
     domain: Domain | None = Field(None, description=(
         "particles leaving this box are removed (and reported); default: the box around all "
         "initial particles, enlarged by half its size upwards and 10 dx elsewhere"))

@@ -33,14 +33,61 @@ def _lattice(lo, hi, dx):
     return X.ravel(), Y.ravel()
 
 
+def _rotated_lattice(lo, hi, dx, origin, angle):
+    """Cell centres origin + (i + 1/2) dx t + (j + 1/2) dx n of the square lattice whose rows
+    run at ``angle`` degrees (t = (cos a, sin a), n = (-sin a, cos a)) that fall in the box
+    [lo, hi] (T §5.3.4: the grid parallel to a slope)."""
+    a = np.radians(angle)
+    t = np.array([np.cos(a), np.sin(a)])
+    n = np.array([-np.sin(a), np.cos(a)])
+    corners = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
+    rel = corners - np.asarray(origin, float)
+    s, q = rel @ t / dx - 0.5, rel @ n / dx - 0.5
+    i = np.arange(np.floor(s.min()), np.ceil(s.max()) + 1)
+    j = np.arange(np.floor(q.min()), np.ceil(q.max()) + 1)
+    I, J = np.meshgrid(i, j)
+    x = origin[0] + dx * ((I + 0.5) * t[0] + (J + 0.5) * n[0])
+    y = origin[1] + dx * ((I + 0.5) * t[1] + (J + 0.5) * n[1])
+    x, y = x.ravel(), y.ravel()
+    # half-open bounds, as the usual grid's cells: a centre on the far edge belongs outside
+    eps = 1e-9 * dx
+    inside = (x >= lo[0] - eps) & (x < hi[0] - eps) & (y >= lo[1] - eps) & (y < hi[1] - eps)
+    return x[inside], y[inside]
+
+
 def fluid_points(region, dx):
+    """Particles of a fluid region: the cell centres of its lattice (the usual grid anchored
+    at its lower-left corner, or its ``grid``) inside it."""
+    grid = getattr(region, "grid", None)
     if isinstance(region, BoxRegion):
-        return _lattice(region.min, region.max, dx)
+        if grid is None:
+            return _lattice(region.min, region.max, dx)
+        return _rotated_lattice(region.min, region.max, dx, grid.origin, grid.angle)
     pts = np.asarray(region.points, dtype=float)
     lo = pts.min(axis=0)
-    x, y = _lattice(lo, pts.max(axis=0), dx)
+    if grid is None:
+        x, y = _lattice(lo, pts.max(axis=0), dx)
+    else:
+        x, y = _rotated_lattice(lo, pts.max(axis=0), dx, grid.origin, grid.angle)
     inside = MplPath(pts).contains_points(np.column_stack([x, y]))
     return x[inside], y[inside]
+
+
+def seam_keep(x, y, region, r):
+    """Mask thinning the seams between fluid regions: of two particles of different regions
+    closer than ``r``, the one of the later region goes (T §5.3.4, Fig 5.2: "some particles
+    lying above the toe of the slope were removed to ensure that no two particles were placed
+    too close together")."""
+    keep = np.ones(x.size, bool)
+    if x.size < 2:
+        return keep
+    pairs = cKDTree(np.column_stack([x, y])).query_pairs(r, output_type="ndarray")
+    if len(pairs):
+        i, j = pairs[:, 0], pairs[:, 1]
+        cross = region[i] != region[j]
+        i, j = i[cross], j[cross]
+        keep[np.where(region[i] > region[j], i, j)] = False
+    return keep
 
 
 def wall_points(region, dx):
@@ -112,7 +159,12 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     segs = segments_of(pd)
     gmag = float(np.hypot(*ctx.g))
     pieces = []
-    for r in pd.fluid.values():
+    for name, r in pd.fluid.items():
+        if waves and isinstance(r, BoxRegion) and r.grid is not None:
+            from sphfoam.case.errors import CaseError
+            raise CaseError.single("system/particleDict", f"fluid.{name}.grid", (
+                "a box carrying the initial waves of constant/waveProperties is filled column "
+                "by column on the usual grid: remove its grid (or the waves)"))
         if waves and isinstance(r, BoxRegion):
             x_, y_, dy_ = wave_columns(r, dx, waves, gmag)
             pieces.append((x_, y_, dy_, r))
@@ -123,6 +175,8 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     yf = np.concatenate([q[1] for q in pieces])
     dyf = np.concatenate([q[2] for q in pieces])
     regf = np.concatenate([np.full(q[0].size, i) for i, q in enumerate(pieces)])
+    ok = seam_keep(xf, yf, regf, pd.minSpacing * dx)
+    xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     walls = list(pd.walls.values())
     if walls and placement != "none":
         layers = getattr(boundary, "wall_layers", None)

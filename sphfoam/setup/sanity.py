@@ -3,6 +3,9 @@
 * every fluid region holds at least one particle row (its extent is at least dx, a polygon
   has an area);
 * a fluid region lies inside the tank (a box wall entry) it is in, on every closed side;
+* fluid regions do not overlap by more than a particle's area (they may meet along a line,
+  e.g. the usual grid over a flat bed and a rotated one over a slope, T §5.3.4: only the seam
+  is thinned);
 * the fluid lies inside ``domain`` when one is given (particles outside it would be removed
   at the first step);
 * a particle budget: the particle count the spacing gives (fluid area / dx^2 plus wall rows)
@@ -134,6 +137,7 @@ def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", suppo
                 problems.append(Problem(file, f"fluid.{name}", f"reaches outside domain "
                                         f"{tuple(dlo)}..{tuple(dhi)}: its particles there "
                                         "would be removed at the first step"))
+    problems += _overlaps(pd, file)
     if problems:
         return problems
     try:
@@ -149,6 +153,41 @@ def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", suppo
                                 f"{_size(need)} of memory; {have}. Use a larger dx (or a "
                                 "smaller domain)"))
     return problems
+
+
+def _inside(region, x, y):
+    if isinstance(region, BoxRegion):
+        (x0, y0), (x1, y1) = region.min, region.max
+        return (x > x0) & (x < x1) & (y > y0) & (y < y1)
+    from matplotlib.path import Path as MplPath
+
+    return MplPath(np.asarray(region.points, float)).contains_points(np.column_stack([x, y]))
+
+
+def _overlaps(pd: ParticleDict, file: str) -> list[Problem]:
+    """Fluid regions that overlap by more than a particle's area: only the seam between them
+    is thinned (``minSpacing``), so the overlap would hold the particles of both at twice
+    the density. Measured on a dx/2 grid over the intersection of their boxes."""
+    out = []
+    dx = pd.dx
+    names = list(pd.fluid)
+    for a in range(len(names)):
+        for b in range(a + 1, len(names)):
+            ra, rb = pd.fluid[names[a]], pd.fluid[names[b]]
+            (la, ha), (lb, hb) = _bbox(ra), _bbox(rb)
+            lo, hi = np.maximum(la, lb), np.minimum(ha, hb)
+            if np.any(hi - lo <= 0.5 * dx) or np.prod((hi - lo) / (0.5 * dx)) > 4e6:
+                continue        # no overlap wider than a seam (or too big to sample: rare)
+            xs = np.arange(lo[0] + 0.25 * dx, hi[0], 0.5 * dx)
+            ys = np.arange(lo[1] + 0.25 * dx, hi[1], 0.5 * dx)
+            X, Y = (g.ravel() for g in np.meshgrid(xs, ys))
+            area = np.count_nonzero(_inside(ra, X, Y) & _inside(rb, X, Y)) * 0.25 * dx * dx
+            if area > dx * dx:
+                out.append(Problem(file, f"fluid.{names[b]}", (
+                    f"overlaps fluid.{names[a]} by about {area:.3g} m^2 ({area / dx / dx:.0f} "
+                    f"dx^2): both would fill the overlap with particles. Make the regions "
+                    f"meet along a line (e.g. the vertical through the toe of a slope)")))
+    return out
 
 
 def check_geometry(case) -> None:
