@@ -208,7 +208,7 @@ def test_beach_shoreline_x_and_metrics(tmp_path):
     bp = build("type breakingPoint; xMin 1; xMax 7.5; still 0.5; toe 2.5;", name="breaking")
     bp.start(case, ctx, "0")
     bp.found["geometric"] = (3.0, 9.0, 0.2)
-    bp.samples = [(0.0, 2.0), (1.0, 3.0)]
+    bp.samples = [(0.0, 2.0, 0.2), (1.0, 3.0, 0.2)]
     bp.end()
     spec = {"R": {"type": "runUp", "function": "shore", "reference": 0.4},
             "xR": {"type": "runUpPosition", "function": "shore", "reference": 10.43,
@@ -240,10 +240,11 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
     length = 0.4 / math.sin(math.radians(5.0))
     edits = {
         "system/particleDict:dx": dx,
-        "system/particleDict:fluid": {
-            "water": {"type": "polygon", "points": [[0.0, 0.0], [toe, 0.0],
-                                                    [toe + d / math.tan(math.radians(5)), d],
-                                                    [0.0, d]]}},
+        "system/particleDict:fluid.flat.min": [0.0, 0.0],
+        "system/particleDict:fluid.flat.max": [toe, d],
+        "system/particleDict:fluid.beach.points": [
+            [toe, 0.0], [toe + d / math.tan(math.radians(5)), d], [toe, d]],
+        "system/particleDict:fluid.beach.grid.origin": [toe, 0.0],
         "system/particleDict:walls.bed.points": [[-0.3, 0.0], [toe, 0.0]],
         "system/particleDict:walls.beach.start": [toe, 0.0],
         "system/particleDict:walls.beach.length": length,

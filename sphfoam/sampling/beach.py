@@ -107,8 +107,8 @@ class BreakingPoint(FunctionObject):
     first reaches ``angle`` (90°: vertical; the front of a shoaling wave steepens from below
     90° and overhangs, above 90°, once it plunges). *Kinematic*: the largest horizontal
     velocity u of the particles in the top ``crestDepth`` of the crest (x_c - 2 dx to the
-    face) reaches ``ratio`` times the crest celerity c = dx_c/dt (over the last
-    ``celerityWindow`` seconds); u/c = 1 is the classical kinematic breaking criterion
+    face) reaches ``ratio`` times the crest celerity c = dx_c/dt (least squares over the
+    last ``celerityWindow`` seconds); u/c = 1 is the classical kinematic breaking criterion
     (e.g. Perlin, Choi & Tian 2013, Annu. Rev. Fluid Mech. 45). Both are evaluated and
     written; ``criterion`` says which one defines the breaking point. Only samples with
     eta_c >= ``minHeight`` and x_c >= ``after`` count.
@@ -165,7 +165,7 @@ class BreakingPoint(FunctionObject):
 
     def start(self, case, ctx, start_time_name):
         super().start(case, ctx, start_time_name)
-        self.samples: list[tuple[float, float]] = []      # (t, x_c)
+        self.samples: list[tuple[float, float, float]] = []      # (t, x_c, eta_c)
         self.found: dict[str, tuple[float, float, float]] = {}
         self.summary_file = self.folder / "summary.dat"
 
@@ -200,25 +200,30 @@ class BreakingPoint(FunctionObject):
         return xc, ec, xface, ang, float(ucrest), float(xfast), self.celerity(time, xc)
 
     def celerity(self, t: float, xc: float) -> float:
-        """dx_c/dt between this sample and the latest one at least celerityWindow earlier."""
+        """dx_c/dt: the slope of the least-squares line through x_c of this sample and of
+        the earlier ones within celerityWindow whose crest stood at least minHeight (NaN
+        until that window holds data)."""
         if not math.isfinite(xc):
             return math.nan
-        for t0, x0 in reversed(self.samples):
-            if t - t0 >= self.coeffs.celerityWindow * (1 - 1e-9) and math.isfinite(x0):
-                return (xc - x0) / (t - t0)
-        return math.nan
+        w = self.coeffs.celerityWindow
+        if not self.samples or t - self.samples[0][0] < w * (1 - 1e-9):
+            return math.nan
+        pts = [(t0, x0) for t0, x0, e0 in self.samples
+               if t - t0 <= w * (1 + 1e-9) and math.isfinite(x0) and e0 >= self.min_height]
+        pts.append((t, xc))
+        tt, xx = np.array(pts).T
+        return float(np.polyfit(tt, xx, 1)[0]) if np.ptp(tt) > 0 else math.nan
 
     def execute(self, sim):
         st, f = _fluid(sim)
         t = float(sim.time)
         xc, ec, xface, ang, ucrest, xfast, cel = self.measure(st.x[f], st.y[f], st.u[f], t)
-        self.samples.append((t, xc))
+        self.samples.append((t, xc, ec))
         ratio = ucrest / cel if (math.isfinite(cel) and cel > 0 and math.isfinite(ucrest)) \
             else math.nan
         self.write_row((t, xc, ec, xface, ang, ucrest, cel, ratio))
         c = self.coeffs
-        counts = math.isfinite(ec) and ec >= (c.minHeight if c.minHeight is not None
-                                              else 3.0 * self.ctx.dx) and xc >= c.after
+        counts = math.isfinite(ec) and ec >= self.min_height and xc >= c.after
         if not counts:
             return
         new = False
@@ -232,10 +237,16 @@ class BreakingPoint(FunctionObject):
             self.write_summary()
 
     # --- the summary --------------------------------------------------------------------
+    @property
+    def min_height(self) -> float:
+        c = self.coeffs
+        return c.minHeight if c.minHeight is not None else 3.0 * self.ctx.dx
+
     def toe_time(self) -> float:
-        """Time the crest passed x = toe (linear between the samples either side)."""
+        """Time the crest (eta_c >= minHeight) first passed x = toe (linear between the
+        samples either side)."""
         xt = self.coeffs.toe if self.coeffs.toe is not None else self.coeffs.xMin
-        s = [(t, x) for t, x in self.samples if math.isfinite(x)]
+        s = [(t, x) for t, x, e in self.samples if math.isfinite(x) and e >= self.min_height]
         for (t0, x0), (t1, x1) in zip(s[:-1], s[1:]):
             if x0 < xt <= x1:
                 return t0 + (t1 - t0) * (xt - x0) / (x1 - x0)
