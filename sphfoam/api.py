@@ -50,7 +50,7 @@ def setup_case(case: "Case | str | Path") -> "Case":
     """``sphfoam setup --force``: particles from ``system/particleDict`` into ``0/`` (and
     the one-cell mesh and ``CASE.foam`` for ParaView). (``sphfoam.setup`` is the
     package of the set-up code, hence the longer name.)"""
-    from sphfoam.setup.initial import setup_case as _setup_case
+    from sphfoam.settling import setup_case as _setup_case
 
     c = _case(case)
     _setup_case(c, log=lambda msg: None)

@@ -15,6 +15,7 @@ from pathlib import Path
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError, Problem
+from sphfoam.settling import check_settling
 from sphfoam.setup.sanity import check_geometry
 
 __all__ = ["check_case", "study_dicts", "CheckReport"]
@@ -69,6 +70,7 @@ def check_case(path: Path | str, study_runs: bool = True) -> CheckReport:
     try:
         case.validate()
         check_geometry(case)
+        check_settling(case)
     except CaseError as e:
         problems.extend(e.problems)
     if (case.path / METRICS_DICT).is_file():
@@ -119,6 +121,7 @@ def validate_runs(study) -> None:
                 c = Case(path)
                 c.validate()
                 check_geometry(c)
+                check_settling(c)
                 _check_metrics(load_metrics(path, run.metrics, source=run.source), c)
             except CaseError as e:
                 problems.extend(Problem(f"{where}: {p.file}", p.key, p.message)

@@ -223,7 +223,7 @@ def setup(case: Path = typer.Argument(Path("."), help="case directory"),
     Also writes the one-cell constant/polyMesh and CASE.foam that ParaView's OpenFOAM reader opens.
     """
     from sphfoam.io.fields import has_particles
-    from sphfoam.setup.initial import setup_case
+    from sphfoam.settling import setup_case
 
     c = _case(case)
     if has_particles(c.path / "0") and not force:
@@ -267,6 +267,9 @@ def check(case: Path = typer.Argument(Path("."), help="case directory, or a stud
             t.add_row("fluid", escape_(f"{name} ({r.type})"),
                       escape_(f"grid at {r.grid.angle:g} deg from {tuple(r.grid.origin)}; "
                               f"seam minSpacing {c.particles.minSpacing:g} dx"))
+    if c.control.settling is not None:
+        t.add_row("settling", f"{c.control.settling.endTime:g} s before t = 0, walls still",
+                  "layout kept as 0.unsettled/")
     if rep.metrics is not None:
         t.add_row("metricsDict", escape_(", ".join(rep.metrics.metrics)), "")
     for name, s in rep.studies.items():

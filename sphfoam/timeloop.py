@@ -23,7 +23,7 @@ from sphfoam.engine.state import GHOST, ParticleState
 from sphfoam.io.fields import has_particles, read_state
 from sphfoam.io.timedirs import (case_lock, read_time_value, recover, start_folder,
                                  write_time)
-from sphfoam.setup.initial import setup_case
+from sphfoam.settling import setup_case
 
 
 class Log:

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from sphfoam.case.case import Case
 from sphfoam.cli import app
-from sphfoam.setup.initial import setup_case
+from sphfoam.settling import setup_case
 from sphfoam.setup.particles import seam_keep
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"
@@ -25,6 +25,7 @@ ANGLE = 5.0
 TOE = 0.4             # x of the toe of the slope
 D = 0.1               # still-water depth over the flat bed
 END = 1.6             # x of the end of the beach (the shoreline is at TOE + D / tan 5 = 1.543)
+SHORE = 1.5430052
 
 #: a tiny flume with a 5 degree beach: the syntax tutorials/solitaryBeach copies
 SLOPE_PARTICLE_DICT = """\
@@ -44,7 +45,7 @@ fluid
     beach                       // over the slope: rows parallel to it, the first dx/2 above
     {
         type    polygon;
-        points  ((0.4 0) (1.6 0.1049863962) (1.6 0.1) (0.4 0.1));
+        points  ((0.4 0) (1.5430052 0.1) (0.4 0.1));    // up to the shoreline
         grid    { origin (0.4 0); angle 5; }
     }
 }
@@ -152,6 +153,28 @@ def test_slope_layout(tmp_path, boundary):
     assert np.max(np.abs(p - 1000 * 9.81 * (D - state.y[f]))) <= 1000 * 9.81 * 0.5 * DX * 1.01
 
 
+def test_a_box_clipped_to_the_walls_fills_the_beach_as_the_polygon(tmp_path):
+    """clipToWalls: a box over the whole beach, on the rotated grid, keeps only the particles
+    above the slope: the same as the polygon up to the shoreline."""
+    poly = setup_case(Case(slope_case(tmp_path / "a")), log=lambda m: None)
+    text = SLOPE_PARTICLE_DICT.replace(
+        "type    polygon;\n        points  ((0.4 0) (1.5430052 0.1) (0.4 0.1));    // up to the "
+        "shoreline", "type    box;\n        min     (0.4 0);\n        max     (1.6 0.1);\n"
+        "        clipToWalls yes;")
+    assert "clipToWalls" in text
+    box = setup_case(Case(slope_case(tmp_path / "b", text)), log=lambda m: None)
+    a = np.unique(np.round(np.column_stack([poly.x, poly.y])[poly.kind == 0] / DX, 6), axis=0)
+    b = np.unique(np.round(np.column_stack([box.x, box.y])[box.kind == 0] / DX, 6), axis=0)
+    assert len(a) == np.count_nonzero(poly.kind == 0)
+    np.testing.assert_array_equal(a, b)
+    # without clipping the box fills the solid under the slope too
+    unclipped = setup_case(Case(slope_case(tmp_path / "c", text.replace(
+        "clipToWalls yes;", "clipToWalls no;"))), log=lambda m: None)
+    uf = unclipped.kind == 0
+    assert np.count_nonzero(_rotated(unclipped.x[uf], unclipped.y[uf])[1] < 0) > 10
+    assert np.all(_rotated(box.x[box.kind == 0], box.y[box.kind == 0])[1] > 0)
+
+
 def test_seam_thinning(tmp_path):
     """Raising minSpacing above the smallest gap at the seam (0.606 dx here, T Fig 5.2)
     removes particles of the later region only, and leaves none closer than it."""
@@ -220,3 +243,132 @@ def test_overlapping_regions_are_reported(tmp_path):
     flat = " ".join(out.split())
     assert code != 0 and "fluid.beach" in flat and "overlaps fluid.flat" in flat, out
 
+
+# --- settling (T §5.3.4) ----------------------------------------------------------------------
+SETTLE = 0.3           # s: about 2.5 crossings of the tank by sound (c0 = 14 m/s, 1.6 m)
+
+#: the flume above with its left wall a paddle that a displacement table would push 5 cm in
+#: 0.05 s: it must not move while the particles settle
+PADDLE_PARTICLE_DICT = SLOPE_PARTICLE_DICT.replace(
+    "points  ((0 0.3) (0 0) (0.4 0) (1.6 0.1049863962) (1.6 0.3));",
+    "points  ((-0.06 0) (0.4 0) (1.6 0.1049863962) (1.6 0.3));").replace(
+    "walls\n{\n", """walls
+{
+    paddle
+    {
+        type    polyline;
+        points  ((0 0.3) (0 0));
+        side    right;
+        layers  3;
+        motion  { type displacementTable; table ((0 (0 0)) (0.05 (0.05 0))); }
+    }
+""")
+
+
+def settling_case(tmp_path: Path, endTime: float = SETTLE) -> Path:
+    case = slope_case(tmp_path, PADDLE_PARTICLE_DICT)
+    cd = case / "system" / "controlDict"
+    cd.write_text(cd.read_text() + f"\nsettling {{ endTime {endTime:g}; }}\n")
+    return case
+
+
+def _fields(folder: Path):
+    from sphfoam.io.fields import read_state
+
+    f = read_state(folder)
+    order = np.argsort(f["origId"])
+    return {k: np.asarray(a)[order] for k, a in f.items()}
+
+
+def test_settling_writes_0_and_keeps_the_unsettled_layout(tmp_path):
+    from sphfoam.io.timedirs import read_time_dict
+
+    case = settling_case(tmp_path)
+    code, out = _check(case)
+    assert code == 0 and "0.3 s before t = 0, walls still" in " ".join(out.split()), out
+    res = CliRunner().invoke(app, ["setup", str(case)])
+    assert res.exit_code == 0, res.output
+    assert "settled in" in res.output
+    raw, settled = _fields(case / "0.unsettled"), _fields(case / "0")
+    # the unsettled layout is exactly what the set-up without settling writes
+    plain = setup_case(Case(slope_case(tmp_path / "plain", PADDLE_PARTICLE_DICT)),
+                       log=lambda m: None)
+    po = np.argsort(plain.id)
+    np.testing.assert_array_equal(raw["positions"][:, 0], plain.x[po])
+    np.testing.assert_array_equal(raw["origId"], settled["origId"])
+    # 0/ is the start: time 0, step 0, fluid at rest, the particles moved
+    d = read_time_dict(case / "0")
+    assert float(d["value"]) == 0.0 and int(d["index"]) == 0
+    f = settled["type"] == 0
+    assert np.all(settled["U"][f] == 0.0)
+    moved = np.hypot(*(settled["positions"][f] - raw["positions"][f]).T) / DX
+    assert moved.max() > 0.05                       # the seam evens out (about 0.9 dx here)
+    assert moved.max() < 1.5 and np.median(moved) < 0.5     # settling, not flowing
+    # every wall still, the paddle included (its table would have moved it 5 cm)
+    w = ~f
+    np.testing.assert_array_equal(settled["positions"][w], raw["positions"][w])
+    # hydrostatic after settling, below the top two rows (five rows deep: the acoustic noise
+    # of weak compressibility is still there after 0.3 s): the fitted p(y) has the gradient
+    # rho0 g within 15 % and the bed pressure rho0 g d within 10 %; RMS deviation from
+    # rho0 g (d - y) under 12 % of rho0 g d
+    y, p = settled["positions"][f, 1], settled["p"][f]
+    deep = y < D - 2 * DX
+    slope, p_bed = np.polyfit(y[deep], p[deep], 1)
+    assert abs(-slope / (1000 * 9.81) - 1) < 0.15
+    assert abs(p_bed / (1000 * 9.81 * D) - 1) < 0.10
+    rms = np.sqrt(np.mean((p[deep] - 1000 * 9.81 * (D - y[deep])) ** 2))
+    assert rms < 0.12 * 1000 * 9.81 * D
+    # re-running setup does not overwrite the settled start
+    res = CliRunner().invoke(app, ["setup", str(case)])
+    assert res.exit_code != 0 and "--force" in res.output
+    # the unsettled layout is exported for ParaView beside the time series
+    res = CliRunner().invoke(app, ["export", "vtk", str(case)])
+    assert res.exit_code == 0, res.output
+    assert (case / "VTK" / f"{case.name}_0.unsettled.vtm").is_file()
+    assert "unsettled" not in (case / "VTK" / f"{case.name}.pvd").read_text()
+
+
+def test_run_without_0_settles_first_then_the_paddle_moves(tmp_path):
+    from sphfoam.timeloop import run_case
+
+    case = settling_case(tmp_path, endTime=0.02)
+    run_case(case, progress=False, echo=None, end_time=0.01)
+    log = (case / "log.sphfoam").read_text()
+    assert "settling for 0.02 s" in log and "settled in" in log
+    raw, start = _fields(case / "0.unsettled"), _fields(case / "0")
+    end = _fields(case / "0.01")
+    paddle = (raw["type"] != 0) & (raw["positions"][:, 0] < 0) & (raw["positions"][:, 1] > 0)
+    assert paddle.sum() == 3 * round(0.3 / DX)
+    np.testing.assert_array_equal(start["positions"][paddle], raw["positions"][paddle])
+    # after t = 0 the table moves it: 0.05 m in 0.05 s, so 0.01 m at t = 0.01
+    np.testing.assert_allclose(end["positions"][paddle, 0] - raw["positions"][paddle, 0],
+                               0.01, rtol=1e-6)
+
+
+@pytest.mark.parametrize("entry, words", [
+    ("settling { }", "settling.endTime: required key is missing"),
+    ("settling { endTime -1; }", "settling.endTime: Input should be greater than 0"),
+    ("settling { endTime 0.5; writeInterval 0.1; }", "settling.writeInterval: unknown key"),
+])
+def test_bad_settling_names_file_and_key(tmp_path, entry, words):
+    case = slope_case(tmp_path)
+    cd = case / "system" / "controlDict"
+    cd.write_text(cd.read_text() + f"\n{entry}\n")
+    code, out = _check(case)
+    flat = " ".join(out.split())
+    assert code != 0 and "system/controlDict" in flat and words in flat, out
+    assert "Traceback" not in out
+
+
+def test_settling_refuses_initial_waves(tutorial):
+    from sphfoam.case.errors import CaseError
+
+    case = tutorial("solitaryCollision")
+    cd = case / "system" / "controlDict"
+    cd.write_text(cd.read_text() + "\nsettling { endTime 0.1; }\n")
+    with pytest.raises(CaseError, match="settling: the initial waves"):
+        setup_case(Case(case), log=lambda m: None)
+    assert not (case / "0.unsettled").exists()
+    code, out = _check(case)
+    flat = " ".join(out.split())
+    assert code != 0 and "system/controlDict: settling: the initial waves" in flat, out

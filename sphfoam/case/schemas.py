@@ -92,6 +92,19 @@ class StabilityChecks(Strict):
         return v
 
 
+class Settling(Strict):
+    """An initialisation run with every wall and paddle still (T §5.3.4: "an initialisation
+    run, with no paddle motion, ... to allow the particles to settle into position"), made by
+    the set-up (``sphfoam setup``, or ``sphfoam run`` on a case without particles): the
+    generated layout is kept as ``0.unsettled/``, the state after ``endTime`` seconds of
+    settling becomes ``0/`` with its time back to 0 and every fluid velocity zeroed."""
+
+    endTime: float = Field(gt=0, description=(
+        "seconds of settling: a few times the time sound takes to cross the tank (length / "
+        "c0), long enough for the seam above a slope's toe to even out (T §5.3.4 does not "
+        "give its settling time)"))
+
+
 class ControlDict(Strict):
     application: str = "sphfoam"
     startFrom: Literal["startTime", "latestTime"] = "latestTime"
@@ -111,6 +124,9 @@ class ControlDict(Strict):
     writePrecision: int = Field(6, ge=1, le=17)
     timePrecision: int = Field(6, ge=1, le=17)
     functions: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    settling: Settling | None = Field(None, description=(
+        "{ endTime 0.5; }: settle the set-up particles with every wall still before t = 0 "
+        "(T §5.3.4); the layout before settling is kept as 0.unsettled/"))
     stability: StabilityChecks = Field(default_factory=StabilityChecks, description=(
         "blow-up detection after every step: { enabled yes; densityRatio (0.5 2); maxSpeed 1; "
         "maxEscaped 0.05; minDeltaT 1e-3; maxKineticEnergy 4; }"))
@@ -225,6 +241,10 @@ class Grid(Strict):
         return v
 
 
+_CLIP_DOC = ("yes: fill only the part of the region on the fluid side of the walls (at least "
+             "dx/2 from them), e.g. a box over a beach filled above the slope; no: the whole "
+             "region (fluid closer than dx/2 to a wall is dropped either way)")
+
 _GRID_DOC = ("{ origin (x y); angle a; }: fill the region on a lattice rotated by a degrees "
              "and anchored at origin (particles above a slope, T §5.3.4); default: the usual "
              "grid anchored at the region's lower-left corner")
@@ -235,6 +255,7 @@ class BoxRegion(Strict):
     min: Vector2
     max: Vector2
     grid: Grid | None = Field(None, description=_GRID_DOC)
+    clipToWalls: bool = Field(False, description=_CLIP_DOC)
 
     @model_validator(mode="after")
     def _order(self):
@@ -247,6 +268,7 @@ class PolygonRegion(Strict):
     type: Literal["polygon"]
     points: list[Vector2] = Field(min_length=3)
     grid: Grid | None = Field(None, description=_GRID_DOC)
+    clipToWalls: bool = Field(False, description=_CLIP_DOC)
 
 
 FluidRegion = Annotated[BoxRegion | PolygonRegion, Field(discriminator="type")]

@@ -7,6 +7,8 @@
     VTK/<case>_<t>.vtm           a multiblock of the two, blocks named fluid and walls
     VTK/<case>.pvd               the time series of the .vtm files (open this one)
     VTK/<case>_fluid.vtp.series  the fluid alone as a time series (and _walls likewise)
+    VTK/<case>_0.unsettled.vtm   the layout before settling, when the case was settled
+                                 (``0.unsettled/``, sphfoam.settling; not in the series)
 
 Each ``.vtp`` is a vtkPolyData with one vertex cell per particle (so the Surface
 representation shows the points) and stores its time as ``TimeValue`` field data.
@@ -32,6 +34,7 @@ from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
 from ..case.times import list_times
+from .timedirs import UNSETTLED
 from .fields import has_particles, read_state
 
 __all__ = ["write_vtp", "export_case", "VECTOR_PAIRS", "BLOCKS"]
@@ -149,6 +152,7 @@ def _previous_outputs(out_dir: Path, name: str) -> list[Path]:
     found = [p for p in out_dir.iterdir() if pat.match(p.name)
              and (p.is_dir() or p.suffix in (".vtm", ".vtp"))]
     found += [out_dir / f"{name}_{b}.vtp.series" for b in BLOCKS]
+    found += [out_dir / f"{name}_{UNSETTLED}", out_dir / f"{name}_{UNSETTLED}.vtm"]
     found.append(out_dir / f"{name}.pvd")
     return [p for p in found if p.exists()]
 
@@ -156,6 +160,23 @@ def _previous_outputs(out_dir: Path, name: str) -> list[Path]:
 def _write_xml(root: ET.Element, path: Path) -> None:
     ET.indent(root)
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+
+
+def _write_vtm(out_dir: Path, stem: str, folder: Path, t: float) -> list[tuple[str, str]]:
+    """``<stem>.vtm`` and its blocks ``<stem>/<block>.vtp`` from a time directory; returns
+    (block, relative path) of each."""
+    (out_dir / stem).mkdir()
+    vtm = ET.Element("VTKFile", type="vtkMultiBlockDataSet", version="1.0",
+                     byte_order="LittleEndian")
+    mb = ET.SubElement(vtm, "vtkMultiBlockDataSet")
+    out = []
+    for i, (block, f) in enumerate(_split(_vectorise(read_state(folder))).items()):
+        rel = f"{stem}/{block}.vtp"
+        write_vtp(out_dir / rel, f, time=t)
+        ET.SubElement(mb, "DataSet", index=str(i), name=block, file=rel)
+        out.append((block, rel))
+    _write_xml(vtm, out_dir / f"{stem}.vtm")
+    return out
 
 
 def export_case(
@@ -201,17 +222,12 @@ def export_case(
     for _, d in selected:
         t = _time_value(d)
         stem = f"{name}_{d.name}"
-        (out_dir / stem).mkdir()
-        vtm = ET.Element("VTKFile", type="vtkMultiBlockDataSet", version="1.0",
-                         byte_order="LittleEndian")
-        mb = ET.SubElement(vtm, "vtkMultiBlockDataSet")
-        for i, (block, f) in enumerate(_split(_vectorise(read_state(d))).items()):
-            rel = f"{stem}/{block}.vtp"
-            write_vtp(out_dir / rel, f, time=t)
-            ET.SubElement(mb, "DataSet", index=str(i), name=block, file=rel)
+        for block, rel in _write_vtm(out_dir, stem, d, t):
             series[block].append({"name": rel, "time": t})
-        _write_xml(vtm, out_dir / f"{stem}.vtm")
         ET.SubElement(coll, "DataSet", timestep=repr(t), group="", part="0", file=f"{stem}.vtm")
+    if times is None and has_particles(case_dir / UNSETTLED):
+        # the layout before settling (sphfoam.settling): beside the series, not in it
+        _write_vtm(out_dir, f"{name}_{UNSETTLED}", case_dir / UNSETTLED, 0.0)
     for block, files in series.items():
         (out_dir / f"{name}_{block}.vtp.series").write_text(
             json.dumps({"file-series-version": "1.0", "files": files}, indent=1))

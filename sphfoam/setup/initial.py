@@ -1,5 +1,7 @@
 """``sphfoam setup``: the particles of system/particleDict, hydrostatic and at rest, written
-as the case's ``0/`` (with the one-cell mesh and ``CASE.foam`` ParaView's reader needs)."""
+as the case's ``0/`` (with the one-cell mesh and ``CASE.foam`` ParaView's reader needs).
+A case with controlDict ``settling`` is set up by :func:`sphfoam.settling.setup_case`, which
+uses the pieces here and settles the particles before writing ``0/``."""
 
 from __future__ import annotations
 
@@ -12,23 +14,35 @@ from sphfoam.setup.sanity import check_geometry
 
 
 def setup_case(case: Case, log=print) -> ParticleState:
-    """Generate particles from system/particleDict and write them to ``0/``."""
+    """Generate particles from system/particleDict and write them to ``0/`` (a case with
+    controlDict ``settling``: :func:`sphfoam.settling.setup_case`)."""
     case.validate()
+    if case.control.settling is not None:
+        raise ValueError("this case settles its particles (controlDict settling): set it up "
+                         "with sphfoam.settling.setup_case")
     check_geometry(case)
     with case_lock(case.path, "setup"):
         return _setup(case, log)
 
 
 def _setup(case: Case, log) -> ParticleState:
+    return write_start(case, generate_case(case), log)
+
+
+def generate_case(case: Case) -> ParticleState:
+    """The particles of the case's system/particleDict for its boundary model and motions,
+    hydrostatic and at rest (nothing written)."""
     sph = case.models.sph
-    eos = sph["equationOfState"]
-    state = generate(case.particles, case.context, eos, boundary=sph["boundary"],
-                     support_radius=case.context.support,
-                     moving=bool(case.models.motions),
-                     waves=list(case.waves.values()))
-    sim_p = eos.pressure(state.rho, case.context)
+    return generate(case.particles, case.context, sph["equationOfState"],
+                    boundary=sph["boundary"], support_radius=case.context.support,
+                    moving=bool(case.models.motions), waves=list(case.waves.values()))
+
+
+def write_start(case: Case, state: ParticleState, log) -> ParticleState:
+    """Write ``state`` as the case's ``0/`` (time 0, step 0), with the one-cell mesh and
+    CASE.foam that ParaView's OpenFOAM reader needs."""
+    sim_p = case.models.sph["equationOfState"].pressure(state.rho, case.context)
     write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
-    # the one-cell mesh and CASE.foam that ParaView's OpenFOAM reader needs
     write_foam_files(case.path, *default_domain(case.particles), case.particles.dx)
     log(f"setup: {state.n_fluid} fluid + {state.n - state.n_fluid} wall particles "
         f"(dx = {case.particles.dx:g} m) written to {case.path / '0'}")

@@ -171,6 +171,10 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         else:
             x_, y_ = fluid_points(r, dx)
             pieces.append((x_, y_, np.full(x_.size, dx), None))
+        if r.clipToWalls and segs:
+            x_, y_, dy_, w_ = pieces[-1]
+            ok = fluid_side(segs, x_, y_, dx)
+            pieces[-1] = (x_[ok], y_[ok], dy_[ok], w_)
     xf = np.concatenate([q[0] for q in pieces])
     yf = np.concatenate([q[1] for q in pieces])
     dyf = np.concatenate([q[2] for q in pieces])
