@@ -49,6 +49,12 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
     missing = [k for k in bnd.wall_fields if k not in state.extra] if walls.any() else []
     if case.models.motions:
         missing += [k for k in ("patch", "x0", "y0") if k not in state.extra]
+    for family, mdl in case.models.sph.items():
+        lacking = [k for k in getattr(mdl, "particle_fields", ()) if k not in state.extra]
+        if family != "boundary" and walls.any() and lacking and not missing:
+            raise CaseError.single(SPH_PROPERTIES, family,
+                                   f"the particles lack the wall field(s) {', '.join(lacking)} "
+                                   f"{mdl.name} reads: run 'sphfoam setup --force' again")
     if missing:
         problem = f"the particles lack the field(s) {', '.join(missing)}"
     elif bnd.wall_placement == "none" and walls.any():

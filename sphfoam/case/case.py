@@ -163,6 +163,11 @@ class Case:
             mdl = build_model(family, spec, SPH_PROPERTIES, family, problems)
             if mdl is not None:
                 sph[family] = mdl
+        # a model that works only with some choices of another family says so
+        for family, mdl in sph.items():
+            check = getattr(mdl, "selection_problems", None)
+            for key, message in (check(sph) if check is not None else ()):
+                problems.append(Problem(SPH_PROPERTIES, f"{family}.{key}", message))
         integ = build_model("integrator", self.schemes.integrator.model_dump(),
                             FILES["sphSchemes"][0], "integrator", problems)
         functions = {}

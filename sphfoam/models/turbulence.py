@@ -6,11 +6,17 @@ pipeline.
 
 from __future__ import annotations
 
-from pydantic import Field
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
 
 from sphfoam.engine.terms import Term
+from sphfoam.models import walllaw as wl
 from sphfoam.models.base import PipelineModel
 from sphfoam.models.viscosity import velocity_gradient_term
+from sphfoam import registry
+from sphfoam.case.errors import CaseError
 from sphfoam.registry import Coeffs, register
 
 
@@ -35,16 +41,55 @@ class SmagorinskySPS(Turbulence):
     conserves linear momentum. It is *added* to dv/dt: with tau of T(3.58) (positive eddy
     viscosity) this is the diffusive sign; T(3.57) prints a minus in front of grad . tau, which
     with T(3.58) as written would be anti-diffusive.
+
+    ``wallLaw`` adds the turbulent wall condition of T §3.10, T(3.84)-(3.87) (Violeau & Issa
+    2007; :mod:`sphfoam.models.walllaw`): on every wall particle the friction velocity u* from
+    the law of the wall (``smooth`` T(3.84), ``rough`` T(3.85) with roughness ``ks``,
+    ``prescribedUPlus`` u_t = ``UPlus`` u*, T §5.3.3) for the fluid's tangential velocity
+    interpolated at the wall particle, the physical wall ``wallDelta`` dx behind the first
+    wall row; the wall particle's stress becomes the wall
+    shear stress tau/rho = u*^2 (t n + n t), which the fluid feels through the SPS divergence,
+    a wall neighbour's stress taken for both particles of the pair, 2 tau_b/rho_b^2 (so that
+    a plane wall exerts tau_w on the fluid, not the mean of tau_w and the fluid's own SPS stress).
+    u* is stored in ``turb_ustar``. It needs wall particles the fluid sees as fluid (the
+    boundaries ``stationaryGhosts`` and ``hybrid``). ``none`` (the default) adds nothing.
     """
 
     name = "smagorinskySPS"
     doc = ("Smagorinsky SPS stress (Dalrymple & Rogers 2006), T(3.56)-(3.61): nu_t = (Cs dx)^2 "
-           "|S|, tau of T(3.58), sum_b m_b (tau_a/rho_a^2 + tau_b/rho_b^2).grad_a W_ab")
+           "|S|, tau of T(3.58), sum_b m_b (tau_a/rho_a^2 + tau_b/rho_b^2).grad_a W_ab; "
+           "wallLaw: the turbulent wall condition T(3.84)-(3.87)")
 
     class Coeffs(Coeffs):
         Cs: float = Field(0.12, ge=0.0, description="Smagorinsky constant Cs of T(3.60)")
         CI: float = Field(0.0066, ge=0.0, description="constant CI of the isotropic term of "
                           "T(3.58)")
+        wallLaw: Literal["none", *wl.LAWS] = Field(
+            "none", description="turbulent wall condition, T §3.10: `smooth` law of the wall "
+            "T(3.84), `rough` T(3.85) (needs ks), `prescribedUPlus` u_t = UPlus u* (needs UPlus), "
+            "`none` (nothing added)")
+        wallDelta: float = Field(0.1, gt=0.0, description="distance delta of the wall "
+                                 "particles from the physical wall, in particle spacings dx "
+                                 "(T §3.10: dx/10)")
+        ks: float | None = Field(None, gt=0.0, description="roughness length ks of T(3.85) "
+                                 "(m), wallLaw rough only")
+        UPlus: float | None = Field(None, gt=0.0, description="prescribed U+ = u_t/u*, wallLaw "
+                                    "prescribedUPlus only (T §5.3.3: 1 < U+ < 2 best)")
+
+        @model_validator(mode="after")
+        def _wall_law_coeffs(self):
+            need = {"rough": "ks", "prescribedUPlus": "UPlus"}
+            for law, key in need.items():
+                given = getattr(self, key) is not None
+                if self.wallLaw == law and not given:
+                    raise ValueError(f"wallLaw {law} needs {key}")
+                if self.wallLaw != law and given:
+                    raise ValueError(f"{key} is used only with wallLaw {law} (wallLaw is "
+                                     f"{self.wallLaw})")
+            if self.wallLaw == "none" and "wallDelta" in self.model_fields_set:
+                raise ValueError("wallDelta is used only with a wallLaw (smooth, rough, "
+                                 "prescribedUPlus)")
+            return self
 
     _STRESS = """\
 sps_sxy = 0.5 * (sps_dudy + sps_dvdx)                                  # T(3.59)
@@ -67,12 +112,80 @@ sps_yy = sps_yy_a + aux[I_turb_tyy, b] / rhob
 acc_x += mb * (sps_xx * gWx + sps_xy * gWy)
 acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
 
+    #: with a wall law, a wall neighbour's stress is the wall shear stress, taken for both
+    #: particles of the pair, so that a plane wall exerts exactly tau_w on the fluid
+    _PAIR_WALL_LAW = """\
+if kindb == FLUID:
+    sps_xx = sps_xx_a + aux[I_turb_txx, b] / rhob
+    sps_xy = sps_xy_a + aux[I_turb_txy, b] / rhob
+    sps_yy = sps_yy_a + aux[I_turb_tyy, b] / rhob
+else:
+    sps_xx = 2.0 * aux[I_turb_txx, b] / rhob
+    sps_xy = 2.0 * aux[I_turb_txy, b] / rhob
+    sps_yy = 2.0 * aux[I_turb_tyy, b] / rhob
+acc_x += mb * (sps_xx * gWx + sps_xy * gWy)
+acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
+
     _TAU = ("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy")
 
+    @property
+    def wall_law(self) -> str:
+        return self.coeffs.wallLaw
+
+    @property
+    def particle_fields(self) -> tuple[str, ...]:
+        """The wall normal and distance behind the wall line the wall law reads (written by
+        the set-up for wall particles, sphfoam.setup.geometry.wall_metadata)."""
+        return ("nx", "ny", "wallDist") if self.wall_law != "none" else ()
+
     def terms(self):
-        return [velocity_gradient_term("sps", self._STRESS, self._TAU),
-                Term("spsStress", ("rates",), init=self._INIT, pair=self._PAIR, reads=("gradW", *self._TAU), writes=("acc",))]
+        pair = self._PAIR if self.wall_law == "none" else self._PAIR_WALL_LAW
+        out = [velocity_gradient_term("sps", self._STRESS, self._TAU),
+               Term("spsStress", ("rates",), init=self._INIT, pair=pair, reads=("gradW", *self._TAU), writes=("acc",))]
+        if self.wall_law != "none":
+            out.append(wl.wall_law_term(self.wall_law))
+        return out
+
+    def imports(self):
+        return [wl.IMPORTS[self.wall_law]] if self.wall_law != "none" else []
 
     def params(self, ctx):
-        return {"turb_cs2": (self.coeffs.Cs * ctx.dx) ** 2,
-                "turb_blin": (2.0 / 3.0) * self.coeffs.CI * ctx.dx ** 2}
+        out = {"turb_cs2": (self.coeffs.Cs * ctx.dx) ** 2,
+               "turb_blin": (2.0 / 3.0) * self.coeffs.CI * ctx.dx ** 2}
+        c = self.coeffs
+        if c.wallLaw == "none":
+            return out
+        delta = c.wallDelta * ctx.dx
+        out["turb_wldelta"] = delta
+        out["turb_wld1"] = 0.5 * ctx.dx          # the first wall row's distance behind the wall line
+        if c.wallLaw == "smooth":
+            out["turb_wlnu"] = ctx.nu
+        elif c.wallLaw == "rough":
+            if math.log(delta / c.ks) / wl.KAPPA + wl.B_ROUGH <= 1.0:
+                raise CaseError.single(
+                    "constant/sphProperties", "turbulence.ks",
+                    f"{c.ks:g} m is too large for delta = {delta:g} m (wallDelta dx): T(3.85) "
+                    f"needs ln(delta/ks)/0.41 + 8.5 > 1, ks < "
+                    f"{delta / math.exp(wl.KAPPA * (1.0 - wl.B_ROUGH)):.3g} m")
+            out["turb_wlks"] = c.ks
+        else:
+            out["turb_wluplus"] = c.UPlus
+        return out
+
+    def selection_problems(self, sph: dict) -> list[tuple[str, str]]:
+        """(key, message) for a boundary the wall law cannot work with: it needs wall
+        particles that the fluid sees as fluid (kind wetWall), whose SPS stress it sets."""
+        if self.wall_law == "none":
+            return []
+        bnd = sph.get("boundary")
+        if bnd is None or _wall_law_boundary(bnd):
+            return []
+        ok = [n for n, cls in registry.families()["boundary"].items()
+              if _wall_law_boundary(cls())]
+        return [("wallLaw", f"wallLaw {self.wall_law} needs wall particles that enter the "
+                 f"SPS stress as fluid; boundary {bnd.name} has none. Boundaries it works "
+                 f"with: {', '.join(ok)}; or set wallLaw none")]
+
+
+def _wall_law_boundary(bnd) -> bool:
+    return bnd.wall_placement != "none" and "wetWall" in bnd.neighbour_kinds()

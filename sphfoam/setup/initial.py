@@ -35,7 +35,8 @@ def generate_case(case: Case) -> ParticleState:
     sph = case.models.sph
     return generate(case.particles, case.context, sph["equationOfState"],
                     boundary=sph["boundary"], support_radius=case.context.support,
-                    moving=bool(case.models.motions), waves=list(case.waves.values()))
+                    moving=bool(case.models.motions), waves=list(case.waves.values()),
+                    fields=[f for m in sph.values() for f in getattr(m, "particle_fields", ())])
 
 
 def write_start(case: Case, state: ParticleState, log) -> ParticleState:

@@ -142,7 +142,7 @@ def local_surface(xf, yf, dx):
 
 
 def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | None = None,
-             moving: bool = False, waves=()) -> ParticleState:
+             moving: bool = False, waves=(), fields=()) -> ParticleState:
     """Particles of a case at rest in hydrostatic equilibrium.
 
     ``boundary`` (the selected boundary model) decides where wall particles go
@@ -152,7 +152,8 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     adds the wall entry index ``patch`` and the initial positions ``x0, y0`` that prescribed
     motions displace. ``waves`` (pairs of InitialWave and theory model, from
     ``constant/waveProperties``) put solitary waves on every box of still water, with their
-    velocity and pressure (sphfoam.setup.waves).
+    velocity and pressure (sphfoam.setup.waves). ``fields``: further per-wall-particle fields
+    other selected models read (e.g. the normal ``nx``, ``ny`` of the turbulent wall law).
     """
     dx = pd.dx
     placement = getattr(boundary, "wall_placement", "rows")
@@ -240,7 +241,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     dy = np.concatenate([dyf, np.full(xw.size, dx)])
     extra = {}
     # the distance behind the wall is always written: it records how the walls were set up
-    wanted = set(getattr(boundary, "wall_fields", ())) | {"wallDist"}
+    wanted = set(getattr(boundary, "wall_fields", ())) | {"wallDist"} | set(fields)
     if wanted and xw.size:
         nx, ny, dist, corner, _ = wall_metadata(segs, xw, yw, dx)
         meta = {"nx": nx, "ny": ny, "wallDist": dist, "corner": corner}
