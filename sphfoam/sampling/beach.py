@@ -102,7 +102,9 @@ class BreakingPoint(FunctionObject):
     over ``xMin``..``xMax`` and finds the crest (x_c, eta_c) as ``crestTracker`` does.
     *Geometric* (the thesis's definition): the front face is the forward edge of the water at
     heights ``still + f eta_c`` for f from ``faceFrom`` to ``faceTo`` (levels dx/2 apart,
-    bands of +-dx/2, walked forwards from the crest until a gap of 2 dx); its angle to the
+    bands of +-dx/2, walked forwards from the crest until a gap of 2 dx; no level below
+    still + 1.5 dx, whose band would reach the still water ahead, and no angle when that
+    leaves less than dx of face: a wave must stand about 3 dx high); its angle to the
     horizontal is that of the least-squares line through them, and the wave breaks when it
     first reaches ``angle`` (90°: vertical; the front of a shoaling wave steepens from below
     90° and overhangs, above 90°, once it plunges). *Kinematic*: the largest horizontal
@@ -184,11 +186,15 @@ class BreakingPoint(FunctionObject):
             return (xc, ec) + (math.nan,) * 5
         # levels of the face, dx/2 apart between faceFrom and faceTo of the crest height
         # (the particle + dx/2 surface convention: a particle at y stands for y + dx/2)
-        lo, hi = c.still + c.faceFrom * ec, c.still + c.faceTo * ec
-        n = max(2, int(math.floor((hi - lo) / (0.5 * dx))) + 1)
-        levels = np.linspace(lo, hi, n)
-        fronts = face_fronts(xf, yf + 0.5 * dx, levels, xc, dx)
-        ang = face_angle(levels, fronts)
+        # no band may reach the still water ahead (its top row reads still +- dx/2): the
+        # levels start at least 1.5 dx above still; a face less than dx high is not measured
+        lo, hi = c.still + max(c.faceFrom * ec, 1.5 * dx), c.still + c.faceTo * ec
+        if hi - lo >= dx * (1 - 1e-9):
+            levels = np.linspace(lo, hi, int(math.floor((hi - lo) / (0.5 * dx) + 1e-9)) + 1)
+            fronts = face_fronts(xf, yf + 0.5 * dx, levels, xc, dx)
+            ang = face_angle(levels, fronts)
+        else:
+            levels, fronts, ang = np.array([hi]), np.array([math.nan]), math.nan
         xface = float(fronts[np.isfinite(fronts)][-1]) if np.isfinite(fronts).any() \
             else math.nan
         ahead = np.nanmax(fronts) if np.isfinite(fronts).any() else xc
