@@ -110,7 +110,7 @@ class BreakingPoint(FunctionObject):
     90° and overhangs, above 90°, once it plunges). *Kinematic*: the largest horizontal
     velocity u of the particles in the top ``crestDepth`` of the crest (x_c - 2 dx to the
     face) reaches ``ratio`` times the crest celerity c = dx_c/dt (least squares over the
-    last ``celerityWindow`` seconds); u/c = 1 is the classical kinematic breaking criterion
+    last ``celerityWindow`` seconds, 0.25); u/c = 1 is the classical kinematic breaking criterion
     (e.g. Perlin, Choi & Tian 2013, Annu. Rev. Fluid Mech. 45). Both are evaluated and
     written; ``criterion`` says which one defines the breaking point. Only samples with
     eta_c >= ``minHeight`` and x_c >= ``after`` count.
@@ -147,8 +147,10 @@ class BreakingPoint(FunctionObject):
             "u/c at which the wave breaks, kinematic"))
         crestDepth: float = Field(0.1, gt=0.0, lt=1.0, description=(
             "the crest particles: those above still + (1 - crestDepth) eta_c, kinematic"))
-        celerityWindow: float = Field(0.1, gt=0.0, description=(
-            "time (s) over which the crest celerity dx_c/dt is taken"))
+        celerityWindow: float = Field(0.25, gt=0.0, description=(
+            "time (s) over which the crest celerity dx_c/dt is fitted (the crest's x jumps "
+            "by a fraction of dx from sample to sample: over 0.1 s c scatters by 50 % at "
+            "d/dx = 10)"))
         minHeight: float | None = Field(None, ge=0.0, description=(
             "only samples with eta_c at least this (m) count; default 3 dx"))
         after: float = Field(-math.inf, description=(
