@@ -78,6 +78,7 @@ MODEL_MODULES = (
     "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.models.metrics",
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
     "sphfoam.models.diffusion", "sphfoam.models.shifting", "sphfoam.sampling.beach",
+    "sphfoam.models.beach_metrics",
 )
 
 

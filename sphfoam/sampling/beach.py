@@ -5,7 +5,7 @@
 by the kinematic criterion (the crest particles outrun the crest); ``surfaceProfiles`` writes
 the free surface and the particles at chosen times (the shapes of T Figs 5.6-5.19), as
 ``.dat`` tables and PNG pictures. The metrics ``breakingTime`` and ``runUpPosition`` read
-them (and ``runUp mode beach``) for ``system/metricsDict``.
+them (and ``runUp mode beach``) for ``system/metricsDict`` (sphfoam.models.beach_metrics).
 
 Both objects read the fluid particles only and use the surface convention of
 :mod:`sphfoam.sampling.waves` (a particle's cell top, y + dx/2, is the surface).
@@ -20,7 +20,6 @@ import numpy as np
 from numba import njit
 from pydantic import Field, field_validator, model_validator
 
-from sphfoam.models.metrics import Metric, MetricCoeffs
 from sphfoam.registry import register
 from sphfoam.sampling.base import FunctionObject, FunctionObjectCoeffs
 from sphfoam.sampling.waves import (GAUGE_WINDOW, _fluid, _label, crest, fraction_surface,
@@ -422,10 +421,12 @@ class SurfaceProfiles(FunctionObject):
             self.picture(folder / "profile.png", st, inside, f, gx, eta, sim.time)
 
     def picture(self, png, st, inside, f, gx, eta, time) -> None:
-        from sphfoam.postprocess import _pyplot, _save
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
 
         c, dx = self.coeffs, self.ctx.dx
-        plt = _pyplot()
         fig, ax = plt.subplots(figsize=(10, 3.6))
         w = inside & ~f
         fl = inside & f
@@ -445,84 +446,6 @@ class SurfaceProfiles(FunctionObject):
             hi = c.yMax if c.yMax is not None else float(np.nanmax(eta) + c.still) + 4 * dx
             ax.set_ylim(lo, hi)
         ax.legend(fontsize=7, loc="upper left")
-        _save(fig, png)
-
-
-# --- metrics -----------------------------------------------------------------------------------
-@register
-class BreakingTime(Metric):
-    """Time from the crest passing the toe gauge to the breaking point, or the breaking time
-    itself, of a ``breakingPoint`` function object (its ``summary.dat``), against a given
-    value (T §5.5.1: 1.96 s in the laboratory, 2.06 s by the thesis's SPH)."""
-
-    name = "breakingTime"
-    doc = "toe-to-breaking time (or breaking time or x) of a breakingPoint function object, " \
-          "against a given value"
-    function_type = "breakingPoint"
-
-    class Coeffs(MetricCoeffs):
-        function: str = Field("breakingPoint", description="the breakingPoint function object")
-        quantity: Literal["toeToBreaking", "time", "x"] = Field("toeToBreaking", description=(
-            "`toeToBreaking`: time from the crest at the toe gauge to breaking (s); `time`: "
-            "the breaking time (s); `x`: where it breaks (m)"))
-        criterion: Literal["geometric", "kinematic"] | None = Field(None, description=(
-            "which criterion's breaking point; default the function object's own"))
-        reference: float | None = Field(None, description="value to compare with")
-
-    @property
-    def unit(self):
-        return "m" if self.coeffs.quantity == "x" else "s"
-
-    def measure(self, case_path, spec):
-        folders = self.folders(case_path)
-        path = folders[-1][1] / "summary.dat"
-        rel = self._rel(path, case_path)
-        if not path.is_file():
-            self.fail("function", f"{rel} not found: the function object "
-                      f"'{self.coeffs.function}' has not run to its end")
-        rows = read_breaking(path)
-        crit = self.coeffs.criterion or next(iter(rows), "geometric")
-        row = rows.get(crit)
-        if row is None or not math.isfinite(row.get(self.coeffs.quantity, math.nan)):
-            self.fail("function", f"{rel}: no breaking point by the {crit} criterion (the "
-                      "wave did not break within the run, or never passed the toe gauge)")
-        return self.value(row[self.coeffs.quantity], self.coeffs.reference)
-
-
-@register
-class RunUpPosition(Metric):
-    """x (or time) of the maximum run-up on a beach, from a ``runUp mode beach`` function
-    object, against a given value (T Table 5.1: 10.43 m from the toe gauge in the
-    laboratory)."""
-
-    name = "runUpPosition"
-    doc = "x (or time) of the maximum run-up of a runUp mode beach function object, against " \
-          "a given value"
-    function_type = "runUp"
-
-    class Coeffs(MetricCoeffs):
-        function: str = Field("runUp", description="the runUp function object (mode beach)")
-        quantity: Literal["x", "time"] = Field("x", description=(
-            "`x`: where the shoreline is at the maximum run-up (m); `time`: when (s)"))
-        origin: float = Field(0.0, description=(
-            "subtracted from x, e.g. the toe gauge's x to measure as T does"))
-        reference: float | None = Field(None, description="value to compare with")
-
-    @property
-    def unit(self):
-        return "m" if self.coeffs.quantity == "x" else "s"
-
-    def check(self, functions):
-        super().check(functions)
-        if functions[self.coeffs.function].get("mode") != "beach":
-            self.fail("function", f"runUp '{self.coeffs.function}' is not mode beach: only a "
-                      "beach's shoreline has a position")
-
-    def measure(self, case_path, spec):
-        cols, data, rel = self.series(case_path)
-        r = data[:, self.column(cols, "runUp", rel)]
-        i = self.peak(data[:, 0], r, "function", "the run-up", rel)
-        if self.coeffs.quantity == "time":
-            return self.value(data[i, 0], self.coeffs.reference)
-        x = data[i, self.column(cols, "xShore", rel)]
-        return self.value(x - self.coeffs.origin, self.coeffs.reference)
+        fig.tight_layout()
+        fig.savefig(png, dpi=110)
+        plt.close(fig)
