@@ -77,7 +77,8 @@ MODEL_MODULES = (
     "sphfoam.models.integrators", "sphfoam.models.motion", "sphfoam.models.wavemakers",
     "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.models.metrics",
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
-    "sphfoam.models.diffusion", "sphfoam.models.shifting",
+    "sphfoam.models.diffusion", "sphfoam.models.shifting", "sphfoam.sampling.beach",
+    "sphfoam.models.beach_metrics",
 )
 
 

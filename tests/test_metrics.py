@@ -228,7 +228,8 @@ def test_dam_break_front_against_martin_moyce(tmp_path):
 
 def test_every_registered_metric_is_exercised_here():
     covered = {"waveHeight", "arrivalTime", "celerity", "peakElevation", "runUp",
-               "channelMaxVelocity", "damBreakFront"}
+               "channelMaxVelocity", "damBreakFront",
+               "breakingTime", "runUpPosition"}      # these two: tests/test_beach.py
     assert set(registry.names("metric")) == covered
     assert "metric" in registry.FAMILIES
 

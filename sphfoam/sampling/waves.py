@@ -506,18 +506,33 @@ def wall_run_up(xf, yf, wall_x, dx, *, still=0.0, band=1.5) -> float:
     return float(np.asarray(yf)[near].max()) + 0.5 * dx - still
 
 
-def beach_run_up(xf, yf, start, angle, dx, *, length=math.inf, still=0.0, band=1.5) -> float:
-    """Shoreline elevation on a plane beach rising from ``start`` at ``angle`` degrees: the
-    highest fluid particle within ``band`` dx of the slope line (along it, 0 <= s <= length),
-    + dx/2, above ``still`` (NaN with no fluid in contact)."""
+def beach_shoreline(xf, yf, start, angle, dx, *, length=math.inf, still=0.0, band=1.5,
+                    on_beach: bool = False) -> tuple[float, float]:
+    """(R, x) of the shoreline on a plane beach rising from ``start`` at ``angle`` degrees,
+    from the fluid particles within ``band`` dx of the slope line (along it,
+    0 <= s <= length); NaN, NaN with no fluid in contact. Default: R is the highest of them
+    + dx/2, above ``still``, and x its x. ``on_beach``: the point of the beach line
+    s_max + dx/2 along it, s_max the furthest particle up the beach (the leading edge of its
+    cell): R its height above ``still`` and x its x, free of the particles' height above
+    the slope (up to band dx), which the default adds to a thin run-up tongue."""
     a = math.radians(angle)
-    rx, ry = np.asarray(xf) - start[0], np.asarray(yf) - start[1]
+    xf, yf = np.asarray(xf), np.asarray(yf)
+    rx, ry = xf - start[0], yf - start[1]
     s = rx * math.cos(a) + ry * math.sin(a)
     n = -rx * math.sin(a) + ry * math.cos(a)
-    near = (np.abs(n) <= band * dx) & (s >= 0.0) & (s <= length)
-    if not near.any():
-        return float("nan")
-    return float(np.asarray(yf)[near].max()) + 0.5 * dx - still
+    near = np.flatnonzero((np.abs(n) <= band * dx) & (s >= 0.0) & (s <= length))
+    if not near.size:
+        return float("nan"), float("nan")
+    if on_beach:
+        top = min(float(s[near].max()) + 0.5 * dx, length)
+        return (start[1] + top * math.sin(a) - still, start[0] + top * math.cos(a))
+    i = near[np.argmax(yf[near])]
+    return float(yf[i]) + 0.5 * dx - still, float(xf[i])
+
+
+def beach_run_up(xf, yf, start, angle, dx, *, length=math.inf, still=0.0, band=1.5) -> float:
+    """Shoreline elevation on a plane beach (see :func:`beach_shoreline`)."""
+    return beach_shoreline(xf, yf, start, angle, dx, length=length, still=still, band=band)[0]
 
 
 @register
@@ -527,7 +542,7 @@ class RunUp(FunctionObject):
     ``mode wall``: the highest fluid particle within ``band`` dx (1.5) of the wall x = ``x``.
     ``mode beach``: the shoreline, the highest fluid particle within ``band`` dx of the beach
     line rising from ``start`` at ``angle`` degrees (as a slope wall of particleDict) over
-    ``length``. Both add dx/2 (the dx/2 surface convention: still water reads R = 0 when
+    ``length``; two more columns give its x and the x at the running maximum. Both add dx/2 (the dx/2 surface convention: still water reads R = 0 when
     ``still`` is its level) and subtract ``still``. NaN while no fluid touches the wall/beach.
     ``surface fraction`` (walls): the highest point of the wall where the SPH fluid fraction,
     with the fluid mirrored across the wall, reaches 1/2 (sub-particle).
@@ -552,6 +567,12 @@ class RunUp(FunctionObject):
         still: float = Field(0.0, description="still-water level (m) run-up is measured from")
         band: float = Field(1.5, gt=0, description=(
             "contact distance from the wall or beach line, in dx"))
+        shoreline: Literal["highestParticle", "onBeach"] = Field(
+            "highestParticle", description=(
+                "mode beach: `highestParticle`: the highest fluid particle in contact + dx/2; "
+                "`onBeach`: the point of the beach line dx/2 beyond the furthest particle "
+                "in contact (a thin tongue's particles sit up to `band` dx above the beach, "
+                "which `highestParticle` adds to the run-up)"))
         surface: SurfaceMode = Field("particle", description=(
             "`particle`: the highest fluid particle in contact + dx/2; `fraction` (mode wall "
             "only): the highest point of the wall where the SPH fluid fraction, the fluid "
@@ -563,6 +584,8 @@ class RunUp(FunctionObject):
                 raise ValueError("mode wall needs the wall position x")
             if self.mode == "beach" and (self.start is None or self.angle is None):
                 raise ValueError("mode beach needs start (x y) and angle")
+            if self.mode == "wall" and self.shoreline != "highestParticle":
+                raise ValueError("shoreline is an option of mode beach only")
             if self.mode == "beach" and self.surface == "fraction":
                 raise ValueError("surface fraction works with mode wall only: the water "
                                  "layer at a beach's shoreline is thinner than the kernel "
@@ -570,8 +593,11 @@ class RunUp(FunctionObject):
             return self
 
     def start(self, case, ctx, start_time_name):
+        if self.coeffs.mode == "beach":     # the shoreline's x, and x at the running maximum
+            self.columns = type(self).columns + ("xShore", "xMaxRunUp")
         super().start(case, ctx, start_time_name)
         self.max = float("nan")
+        self.x_max = float("nan")
 
     def measure(self, xf, yf, vf=None) -> float:
         c, dx = self.coeffs, self.ctx.dx
@@ -585,6 +611,16 @@ class RunUp(FunctionObject):
 
     def execute(self, sim):
         st, f = _fluid(sim)
+        c = self.coeffs
+        if c.mode == "beach":
+            r, xs = beach_shoreline(st.x[f], st.y[f], c.start, c.angle, self.ctx.dx,
+                                    length=c.length, still=c.still, band=c.band,
+                                    on_beach=c.shoreline == "onBeach")
+            if r > self.max or not math.isfinite(self.max):
+                self.x_max = xs if math.isfinite(r) else self.x_max
+            self.max = float(np.fmax(self.max, r))
+            self.write_row((sim.time, r, self.max, xs, self.x_max))
+            return
         r = self.measure(st.x[f], st.y[f], _fluid_volumes(st, f))
         self.max = float(np.fmax(self.max, r))
         self.write_row((sim.time, r, self.max))
