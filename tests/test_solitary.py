@@ -91,3 +91,19 @@ def test_sample_adds_gauges_after_a_run_and_plot_compares_them_with_theory(tutor
     assert table.shape == (3, 5)
     res = runner.invoke(app, ["sample", str(case), "-f", "nope"])
     assert res.exit_code != 0 and "late" in res.output
+
+
+def test_initial_waves_set_up_beside_wall_particles(tutorial):
+    """Initial waves (constant/waveProperties) with a boundary model that has wall particles:
+    the wave's velocities reach the fluid columns, the walls get particles (a regression: the
+    wall rows once replaced the fluid regions' list the wave fields were set from)."""
+    A, d = 3.0, 10.0
+    kdv2 = registry.build("waveTheory", {"type": "kdv2"}).solitary(A, d)
+    case = tutorial("solitaryWallRunup", {"system/particleDict:dx": 1.0,
+                                          "constant/sphProperties:boundary":
+                                          {"type": "stationaryGhosts"}})
+    st = setup_case(Case(case), log=lambda m: None)
+    assert (st.kind != 0).sum() > 0
+    f = np.flatnonzero((st.kind == 0) & (np.abs(st.x) < 0.51))   # the crest's columns
+    assert f.size > 0
+    np.testing.assert_allclose(st.u[f], kdv2.u(st.x[f], st.y[f], x0=0.0), rtol=1e-9)

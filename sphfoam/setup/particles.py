@@ -189,11 +189,11 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     walls = list(pd.walls.values())
     if walls and placement != "none":
         layers = getattr(boundary, "wall_layers", None)
-        pieces = [wall_points(r if layers is None else r.model_copy(update={"layers": layers}),
-                              dx) for r in walls]
-        xw = np.concatenate([p[0] for p in pieces])
-        yw = np.concatenate([p[1] for p in pieces])
-        pw = np.concatenate([np.full(len(p[0]), i) for i, p in enumerate(pieces)])
+        wall_pieces = [wall_points(r if layers is None else r.model_copy(update={"layers": layers}),
+                                   dx) for r in walls]
+        xw = np.concatenate([p[0] for p in wall_pieces])
+        yw = np.concatenate([p[1] for p in wall_pieces])
+        pw = np.concatenate([np.full(len(p[0]), i) for i, p in enumerate(wall_pieces)])
         keep = _first_of_duplicates(xw, yw, 0.5 * dx)
         xw, yw, pw = xw[keep], yw[keep], pw[keep]
         uw = np.array([walls[i].velocity[0] for i in pw])
