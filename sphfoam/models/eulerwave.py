@@ -144,7 +144,10 @@ class EulerSolution:
         grid = _Grid(L, N)
         # continuation in A/d from the KdV profile (Newton alone is safe up to about 0.35),
         # the intermediate waves on a grid half as fine, then spectrally interpolated
-        steps = [] if eps <= 0.35 else list(np.arange(0.3, eps - 0.05, 0.1))
+        # (steps of 0.1 up to 0.6, then of 0.03: a jump of 0.15 from 0.6 fails at 0.75)
+        steps = [] if eps <= 0.35 else [e for e in np.arange(0.3, 0.65, 0.1) if e < eps - 0.05]
+        if eps > 0.65:
+            steps += [e for e in np.arange(0.63, eps, 0.03) if e < eps - 0.01]
         coarse = _Grid(L, N // 2)
         kk = math.sqrt(0.75 * eps) * (1.0 - 0.625 * eps)
         v = (steps[0] if steps else eps) / np.cosh(kk * (coarse if steps else grid).alpha[

@@ -1,5 +1,5 @@
-"""Riemann-solver SPH of Zhang, Hu & Adams (2017, JCP 340, 439-455): the low-dissipation
-weakly compressible scheme.
+"""Riemann-solver SPH of Zhang, Hu & Adams (2017, JCP 335, 605-620,
+doi:10.1016/j.jcp.2017.01.027): the low-dissipation weakly compressible scheme.
 
 Each pair a, b is a one-dimensional Riemann problem along e_ab = -r_ab / |r_ab| (from a to
 b): left state (rho_a, U_L = v_a . e_ab, p_a), right state (rho_b, U_R = v_b . e_ab, p_b).
@@ -63,7 +63,7 @@ class RiemannContinuity(Continuity):
 
     name = "riemann"
     doc = ("drho_a/dt = 2 rho_a sum_b m_b/rho_b (v_a - v*) . grad_a W_ab with U* of the "
-           "linearised Riemann solver, Zhang, Hu & Adams (2017, JCP 340)")
+           "linearised Riemann solver, Zhang, Hu & Adams (2017, JCP 335)")
     drho_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
     #: -2 rho_a m_b/rho_b (U* - (U_L + U_R)/2) e_ab . grad_a W_ab, e_ab = -r_ab / |r_ab|
     dissipation_code = _PAIR_STATE + """\
@@ -98,7 +98,7 @@ class RiemannMomentum(PipelineModel):
     name = "riemann"
     doc = ("dv_a/dt = -2 sum_b m_b P*/(rho_a rho_b) grad_a W_ab, P* of the linearised "
            "Riemann solver with the low-dissipation limiter beta = min(eta max(U_L - U_R, 0),"
-           " c_bar), Zhang, Hu & Adams (2017, JCP 340)")
+           " c_bar), Zhang, Hu & Adams (2017, JCP 335)")
 
     class Coeffs(Coeffs):
         limiter: Literal["lowDissipation", "none"] = Field(

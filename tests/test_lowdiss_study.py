@@ -1,0 +1,76 @@
+"""The low-dissipation studies of issue 13 (docs/low-dissipation.md): every run of
+tutorials/solitaryWave/studyDict.lowDissipation(.Screen) and
+tutorials/solitaryWallRunup/studyDict.lowDissipation clones into a valid case whose metrics
+can be read, measured against the exact (Euler) wave with the sub-particle gauges."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import pytest
+
+from sphfoam import study as st
+from sphfoam.case import foamdict
+
+TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"
+SKIP = shutil.ignore_patterns("study*", "runUp", "0", "[1-9]*", "postProcessing", "log.*",
+                              "VTK", "*.png")
+
+
+def _copy(tmp_path: Path, name: str) -> Path:
+    dst = tmp_path / name
+    shutil.copytree(TUTORIALS / name, dst, ignore=SKIP)
+    for f in (TUTORIALS / name).glob("studyDict*"):
+        shutil.copy(f, dst / f.name)
+    return dst
+
+
+@pytest.mark.parametrize("case, dict_name, first", [
+    ("solitaryWave", "studyDict.lowDissipation", "case11_d10"),
+    ("solitaryWave", "studyDict.lowDissipationScreen", "fourtakasShift"),
+    ("solitaryWallRunup", "studyDict.lowDissipation", "P_a03"),
+])
+def test_every_run_clones_into_a_valid_case(tmp_path, case, dict_name, first):
+    base = _copy(tmp_path, case)
+    s = st.load(base / dict_name)
+    assert s.runs[0].name == first
+    todo = st.prepare(s)                    # clones and validates every run, or raises
+    assert [r.name for r in todo] == [r.name for r in s.runs]
+    for run in s.runs:
+        ctl = foamdict.read(Path(run.path) / "system" / "controlDict")["functions"]
+        # every gauge of these studies reads the sub-particle surface (fluid fraction 1/2)
+        # (the wall study's runUpParticle keeps the thesis's reading, for comparison)
+        for name, fo in ctl.items():
+            want = "particle" if name == "runUpParticle" else "fraction"
+            assert fo.get("surface", "particle") == want, (run.name, name)
+
+
+def test_flume_study_measures_against_the_exact_wave():
+    s = st.load(TUTORIALS / "solitaryWave" / "studyDict.lowDissipation")
+    m = s.spec.metrics
+    assert [k for k in m if k.startswith("H")] == [f"H{x}" for x in range(2, 19, 2)]
+    assert all(m[f"H{x}"]["reference"] == 0.15 for x in range(2, 19, 2))
+    assert m["celerity"]["theory"] == "euler"
+    dx = {r.name: s.edits[r.name].get("system/particleDict:dx", 0.05) for r in s.runs}
+    assert {n: 0.5 / v for n, v in dx.items() if n.startswith("case11_")} == {
+        "case11_d10": 10.0, "case11_d20": 20.0, "case11_d40": 40.0}
+    assert all(math.isclose(0.5 / v, int(n.rsplit("_d", 1)[1])) for n, v in dx.items())
+
+
+def test_wall_study_references_are_su_and_mirie_third_order(tmp_path):
+    """R/d = 2a + a^2/2 + 3a^3/4 (Su & Mirie 1980) for a = A/d of each run."""
+    base = _copy(tmp_path, "solitaryWallRunup")
+    s = st.load(base / "studyDict.lowDissipation")
+    st.prepare(s)
+    for run in s.runs:
+        a = float(run.name.rsplit("_a", 1)[1]) / 10.0
+        wave = foamdict.read(Path(run.path) / "constant" / "waveProperties")["waves"]
+        assert float(wave["incident"]["height"]) == pytest.approx(10.0 * a)
+        md = foamdict.read(Path(run.path) / "system" / "metricsDict")["metrics"]
+        ref = 2 * a + a * a / 2 + 0.75 * a**3
+        assert float(md["runUp"]["reference"]) == pytest.approx(ref, rel=1e-4)
+        assert float(md["runUpParticle"]["reference"]) == pytest.approx(ref, rel=1e-4)
+        assert float(md["celerity"]["height"]) == pytest.approx(10.0 * a)
+        assert md["celerity"]["theory"] == "euler"
