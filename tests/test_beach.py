@@ -271,7 +271,7 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
         "system/particleDict:walls.paddle.motion.waveMaker.height": 0.5 * d,
         "system/particleDict:walls.paddle.motion.waveMaker.depth": d,
         "constant/sphProperties:equationOfState.vmax": math.sqrt(9.81 * 1.5 * d),
-        "system/controlDict:endTime": 2.5,
+        "system/controlDict:endTime": 3.0,
         "system/controlDict:settling.endTime": 0.2,         # sound crosses in 0.1 s
         "system/controlDict:writeInterval": 1.25,
         "system/controlDict:functions.toe.x": [toe - 0.15],
