@@ -23,19 +23,12 @@ from pathlib import Path
 import numpy as np
 
 import sphfoam
+from sphfoam.cachedir import cache_root
 from sphfoam.engine import terms as T
 from sphfoam.engine.fastmath import FASTMATH_SOURCE
 
 #: the fixed scalar slots every pipeline reads from ``prm`` before the models' own
 CORE_PARAMS = ("h", "inv_h", "support2", "eta2", "gx", "gy")
-
-
-def cache_root() -> Path:
-    env = os.environ.get("SPHFOAM_CACHE_DIR")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "sphfoam"
 
 
 def _package_fingerprint() -> str:
