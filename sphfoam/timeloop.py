@@ -269,17 +269,30 @@ def _purge(written: list[Path], keep: int):
 
 class _StopRequest:
     """Ctrl-C sets a flag the time loop checks between steps, so a step is never cut in half
-    and the state written on interruption restarts exactly. A second Ctrl-C stops at once."""
+    and the state written on interruption restarts exactly. A second Ctrl-C stops at once.
+
+    A second Ctrl-C that lands inside a finaliser (``__del__``, e.g. numba's compiler freeing
+    an LLVM object) cannot propagate: Python would print it as an "Exception ignored"
+    traceback and go on. The flags are set already, so the loop stops at the next step
+    boundary with the same message; the hook only keeps that traceback off the screen."""
 
     def __init__(self):
         import signal
+        import sys
         import threading
 
         self.requested = False
         self.hard = False
         self._previous = None
+        self._unraisable = None
         if threading.current_thread() is threading.main_thread():
             self._previous = signal.signal(signal.SIGINT, self._handle)
+            self._unraisable = sys.unraisablehook
+            sys.unraisablehook = self._quiet_interrupt
+
+    def _quiet_interrupt(self, unraisable):
+        if not (self.requested and isinstance(unraisable.exc_value, KeyboardInterrupt)):
+            self._unraisable(unraisable)
 
     def _handle(self, signum, frame):
         if self.requested:
@@ -289,9 +302,12 @@ class _StopRequest:
 
     def restore(self):
         import signal
+        import sys
 
         if self._previous is not None:
             signal.signal(signal.SIGINT, self._previous)
+        if getattr(self, "_unraisable", None) is not None:
+            sys.unraisablehook = self._unraisable
 
 
 class _Progress:

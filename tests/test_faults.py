@@ -464,3 +464,34 @@ def test_second_ctrl_c_is_reported_as_not_written(tutorial, monkeypatch, where):
     assert [p.name for _, p in list_times(case)] == ["0"]
     assert "NOT written" in (case / "log.sphfoam").read_text()
     assert not (case / LOCK_FILE).exists()
+
+
+def test_second_ctrl_c_inside_a_finaliser_prints_no_traceback():
+    """A KeyboardInterrupt raised by the second Ctrl-C inside a ``__del__`` (numba's compiler
+    freeing LLVM objects) is not printed as an "Exception ignored" traceback once a stop is
+    requested; other unraisable exceptions still reach the previous hook."""
+    import sys
+
+    from sphfoam.timeloop import _StopRequest
+
+    seen = []
+    old = sys.unraisablehook
+    sys.unraisablehook = seen.append
+    try:
+        stop = _StopRequest()
+
+        class Finaliser:
+            def __init__(self, exc):
+                self.exc = exc
+
+            def __del__(self):
+                raise self.exc
+
+        stop.requested = stop.hard = True
+        Finaliser(KeyboardInterrupt())            # dropped: the loop stops at the next step
+        Finaliser(ValueError("real"))             # passed on
+        stop.restore()
+        assert sys.unraisablehook == seen.append
+    finally:
+        sys.unraisablehook = old
+    assert [type(u.exc_value) for u in seen] == [ValueError]
