@@ -115,6 +115,12 @@ def _pipeline_models():
 def test_declared_reads_and_writes_match_the_code(model):
     """What a term reads and writes is declared: the test reads the code so that the
     generator never has to."""
+    assert_declarations_match(model)
+
+
+def assert_declarations_match(model):
+    """Every quantity the terms' code uses is declared (also used for models' non-default
+    options, e.g. tests/test_walllaw.py)."""
     for t in model.terms():
         code = "\n".join((t.init, t.pair, t.final))
         declared = set(t.reads) | set(t.writes) | set(t.corrects)
