@@ -210,13 +210,14 @@ def _wall_law_boundary(bnd) -> bool:
 class MixingLength(SmagorinskySPS):
     """Prandtl's mixing-length eddy viscosity for wall-bounded flows, nu_t = l_m^2 |S|.
 
-    The algebraic closure of Violeau & Issa (2007, §3) and Pope (2000, §10.3), in the stress
+    The algebraic Reynolds-averaged closure (Pope 2000, §10.3; Violeau & Issa 2007 use
+    mixing-length-based and k-epsilon closures for channel flows, T §5.3.2), in the stress
     machinery of the SPS model (velocity gradient T(3.61), S_ij T(3.59), |S| = sqrt(2 S_ij
     S_ij), tau/rho = 2 nu_t (S_ij - S_kk delta_ij/3), the symmetric divergence and the same
     turbulent wall condition ``wallLaw``), with the filter width Cs dx of T(3.60) replaced by
     the mixing length
 
-        l_m = kappa eta sqrt(1 - eta/H)      (eta < H; 0 beyond),
+        l_m = kappa eta sqrt(1 - eta/H)      (eta < H; 0 beyond; chosen as below),
 
     eta the particle's distance from the physical wall (``wallDelta`` dx behind the first wall
     row, as the wall law's) and H the ``outerLength`` (the half width of a closed channel, the
@@ -242,7 +243,8 @@ class MixingLength(SmagorinskySPS):
     """
 
     name = "mixingLength"
-    doc = ("Prandtl mixing-length eddy viscosity (Violeau & Issa 2007; Pope 2000 §10.3): "
+    doc = ("Prandtl mixing-length eddy viscosity (Pope 2000 §10.3), a Reynolds-averaged "
+           "closure as Violeau & Issa (2007) use for channel flows: "
            "nu_t = l_m^2 |S|, l_m = kappa eta sqrt(1 - eta/H), eta the distance from the "
            "wall; stress, divergence and wallLaw as smagorinskySPS")
 
