@@ -164,6 +164,25 @@ def test_log_law_fit_recovers_the_friction_velocity(tmp_path):
     assert "u* fitted" in (fo.folder / "profile.dat").read_text()
 
 
+def test_log_law_force_balance_counts_the_fluid(tmp_path):
+    """A channel periodic over 0.3 m with 39 rows of 12 particles of mass rho0 dx^2 (the
+    tutorial's): the fluid fills 39 dx = 0.975 m of the l = 1 m between the wall rows, so
+    each wall carries F rho0 0.975/2 and u* = sqrt(0.002 * 0.4875) = 0.0312250 m/s, not
+    sqrt(F l/2) = 0.0316228."""
+    dx, l, Fx, rho0 = 0.025, 1.0, 0.002, 1000.0
+    yr = np.repeat(np.arange(1, 40) * dx, 12)
+    fo = VelocityProfile(VelocityProfile.Coeffs(l=l, theory="logLaw", times=[0.0], plot=False))
+    fo.object_name = "profile"
+    dom = SimpleNamespace(periodic=["x"], min=(0.0, -0.1), max=(0.3, 1.1))
+    fo.start(SimpleNamespace(path=tmp_path, particles=SimpleNamespace(domain=dom)),
+             SimpleNamespace(dx=dx, g=(Fx, 0.0), nu=1e-6, rho0=rho0), "0")
+    state = SimpleNamespace(y=yr, u=ct.velocity_deficit(yr, 0.9, 0.03, l),
+                            kind=np.full(yr.size, FLUID), m=np.full(yr.size, rho0 * dx * dx))
+    fo.execute(SimpleNamespace(time=0.0, state=state))
+    assert fo.samples[-1]["uStarTheory"] == pytest.approx(0.0312250, rel=1e-6)
+    assert fo.samples[-1]["uStarFit"] == pytest.approx(0.03, rel=1e-6)
+
+
 def test_profile_window_average(tmp_path):
     """With ``window`` the sampled profile is the mean over the steps of the window."""
     dx = L / 10

@@ -9,6 +9,8 @@ segment, and one more per corner whose two segments both qualify.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit, prange
 from sphfoam.engine.fastmath import FASTMATH
@@ -166,6 +168,30 @@ def dormant_ghost_near_fluid(x, y, kind, gidx, active, nb_start, nb_idx, support
                 if dx * dx + dy * dy < support2:
                     bad += 1
     return bad > 0
+
+
+@njit(cache=True)           # no fast-math: it compares with inf
+def line_distance(x, y, seg, out):
+    """Signed distance of each point to the nearest wall line, positive on the fluid side:
+    the segment nearest in Euclidean distance (its end points included), then n . (x - p0)
+    with its normal n into the fluid. ``seg`` is the (S, 9) array of
+    :func:`segment_array` (p0x, p0y, tx, ty, nx, ny, L, ...); with no
+    segments every distance is +inf."""
+    for i in range(x.shape[0]):
+        best = math.inf
+        sd = math.inf
+        for s in range(seg.shape[0]):
+            rx = x[i] - seg[s, 0]
+            ry = y[i] - seg[s, 1]
+            t = min(max(rx * seg[s, 2] + ry * seg[s, 3], 0.0), seg[s, 6])
+            ex = rx - t * seg[s, 2]
+            ey = ry - t * seg[s, 3]
+            d = ex * ex + ey * ey
+            if d < best:
+                best = d
+                sd = rx * seg[s, 4] + ry * seg[s, 5]
+        out[i] = sd
+
 
 
 def segment_array(segments, offsets=None, velocities=None) -> np.ndarray:

@@ -7,7 +7,7 @@ pipeline.
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import ClassVar, Literal
 
 from pydantic import Field, model_validator
 
@@ -16,6 +16,7 @@ from sphfoam.case.errors import CaseError
 from sphfoam.engine.terms import Term
 from sphfoam.models import walllaw as wl
 from sphfoam.models.base import PipelineModel
+from sphfoam.models.mirror import line_distance, segment_array
 from sphfoam.models.viscosity import velocity_gradient_term
 from sphfoam.registry import Coeffs, register
 
@@ -23,6 +24,41 @@ from sphfoam.registry import Coeffs, register
 class Turbulence(PipelineModel):
     family = "turbulence"
     prefix = "turb_"
+
+
+class WallLawCoeffs(Coeffs):
+    """The turbulent wall condition's coefficients (T §3.10), shared by the closures."""
+
+    #: whether ``wallDelta`` means something without a wall law (the mixing length's eta)
+    delta_without_law: ClassVar[bool] = False
+
+    wallLaw: Literal["none", *wl.LAWS] = Field(
+        "none", description="turbulent wall condition, T §3.10: `smooth` law of the wall "
+        "T(3.84), `rough` T(3.85) (needs ks), `prescribedUPlus` u_t = UPlus u* (needs UPlus), "
+        "`none` (nothing added)")
+    wallDelta: float = Field(0.1, gt=0.0, description="distance delta of the wall "
+                             "particles from the physical wall, in particle spacings dx "
+                             "(T §3.10: dx/10)")
+    ks: float | None = Field(None, gt=0.0, description="roughness length ks of T(3.85) "
+                             "(m), wallLaw rough only")
+    UPlus: float | None = Field(None, gt=0.0, description="prescribed U+ = u_t/u*, wallLaw "
+                                "prescribedUPlus only (T §5.3.3: 1 < U+ < 2 best)")
+
+    @model_validator(mode="after")
+    def _wall_law_coeffs(self):
+        need = {"rough": "ks", "prescribedUPlus": "UPlus"}
+        for law, key in need.items():
+            given = getattr(self, key) is not None
+            if self.wallLaw == law and not given:
+                raise ValueError(f"wallLaw {law} needs {key}")
+            if self.wallLaw != law and given:
+                raise ValueError(f"{key} is used only with wallLaw {law} (wallLaw is "
+                                 f"{self.wallLaw})")
+        if self.wallLaw == "none" and "wallDelta" in self.model_fields_set and \
+                not self.delta_without_law:
+            raise ValueError("wallDelta is used only with a wallLaw (smooth, rough, "
+                             "prescribedUPlus)")
+        return self
 
 
 @register
@@ -60,36 +96,10 @@ class SmagorinskySPS(Turbulence):
            "|S|, tau of T(3.58), sum_b m_b (tau_a/rho_a^2 + tau_b/rho_b^2).grad_a W_ab; "
            "wallLaw: the turbulent wall condition T(3.84)-(3.87)")
 
-    class Coeffs(Coeffs):
+    class Coeffs(WallLawCoeffs):
         Cs: float = Field(0.12, ge=0.0, description="Smagorinsky constant Cs of T(3.60)")
         CI: float = Field(0.0066, ge=0.0, description="constant CI of the isotropic term of "
                           "T(3.58)")
-        wallLaw: Literal["none", *wl.LAWS] = Field(
-            "none", description="turbulent wall condition, T §3.10: `smooth` law of the wall "
-            "T(3.84), `rough` T(3.85) (needs ks), `prescribedUPlus` u_t = UPlus u* (needs UPlus), "
-            "`none` (nothing added)")
-        wallDelta: float = Field(0.1, gt=0.0, description="distance delta of the wall "
-                                 "particles from the physical wall, in particle spacings dx "
-                                 "(T §3.10: dx/10)")
-        ks: float | None = Field(None, gt=0.0, description="roughness length ks of T(3.85) "
-                                 "(m), wallLaw rough only")
-        UPlus: float | None = Field(None, gt=0.0, description="prescribed U+ = u_t/u*, wallLaw "
-                                    "prescribedUPlus only (T §5.3.3: 1 < U+ < 2 best)")
-
-        @model_validator(mode="after")
-        def _wall_law_coeffs(self):
-            need = {"rough": "ks", "prescribedUPlus": "UPlus"}
-            for law, key in need.items():
-                given = getattr(self, key) is not None
-                if self.wallLaw == law and not given:
-                    raise ValueError(f"wallLaw {law} needs {key}")
-                if self.wallLaw != law and given:
-                    raise ValueError(f"{key} is used only with wallLaw {law} (wallLaw is "
-                                     f"{self.wallLaw})")
-            if self.wallLaw == "none" and "wallDelta" in self.model_fields_set:
-                raise ValueError("wallDelta is used only with a wallLaw (smooth, rough, "
-                                 "prescribedUPlus)")
-            return self
 
     _STRESS = """\
 sps_sxy = 0.5 * (sps_dudy + sps_dvdx)                                  # T(3.59)
@@ -150,9 +160,14 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
         return [wl.IMPORTS[self.wall_law]] if self.wall_law != "none" else []
 
     def params(self, ctx):
-        out = {"turb_cs2": (self.coeffs.Cs * ctx.dx) ** 2,
-               "turb_blin": (2.0 / 3.0) * self.coeffs.CI * ctx.dx ** 2}
+        return {"turb_cs2": (self.coeffs.Cs * ctx.dx) ** 2,
+                "turb_blin": (2.0 / 3.0) * self.coeffs.CI * ctx.dx ** 2,
+                **self.wall_law_params(ctx)}
+
+    def wall_law_params(self, ctx) -> dict[str, float]:
+        """The coefficients of the wall law's term (none without a wall law)."""
         c = self.coeffs
+        out = {}
         if c.wallLaw == "none":
             return out
         delta = c.wallDelta * ctx.dx
@@ -189,3 +204,139 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
 
 def _wall_law_boundary(bnd) -> bool:
     return bnd.wall_placement != "none" and "wetWall" in bnd.neighbour_kinds()
+
+
+@register
+class MixingLength(SmagorinskySPS):
+    """Prandtl's mixing-length eddy viscosity for wall-bounded flows, nu_t = l_m^2 |S|.
+
+    The algebraic Reynolds-averaged closure (Pope 2000, §10.3; Violeau & Issa 2007 use
+    mixing-length-based and k-epsilon closures for channel flows, T §5.3.2), in the stress
+    machinery of the SPS model (velocity gradient T(3.61), S_ij T(3.59), |S| = sqrt(2 S_ij
+    S_ij), tau/rho = 2 nu_t (S_ij - S_kk delta_ij/3), the symmetric divergence and the same
+    turbulent wall condition ``wallLaw``), with the filter width Cs dx of T(3.60) replaced by
+    the mixing length
+
+        l_m = kappa eta sqrt(1 - eta/H)      (eta < H; 0 beyond; chosen as below),
+
+    eta the particle's distance from the physical wall (``wallDelta`` dx behind the first wall
+    row, as the wall law's) and H the ``outerLength`` (the half width of a closed channel, the
+    depth of an open one; unset: l_m = kappa eta, the log layer's). In a fully developed
+    channel the total shear stress falls linearly, tau = rho u*^2 (1 - eta/H), so this l_m
+    makes l_m^2 (du/deta)^2 = u*^2 (1 - eta/H) hold for du/deta = u*/(kappa eta): the
+    equilibrium profile is the log law up to the centre, the velocity-deficit law of T Fig
+    3.15. The viscous sub-layer is not resolved (the first fluid row lies at y+ = dx u*/nu,
+    ~ 800 in the tutorial, where van Driest's damping 1 - exp(-y+/26) is 1 to 1e-13); the
+    wall law supplies the wall stress. No isotropic term (it would go into the pressure).
+
+    eta = ``lineDist`` + dx/2 + delta, ``lineDist`` the signed distance of the particle to the
+    nearest wall line of ``system/particleDict`` (written by the set-up, recomputed in numba
+    from the wall segments, moved with prescribed motions, at every neighbour-list build:
+    between builds no particle moves more than half the list's skin).
+
+    The velocity gradient is taken over the fluid neighbours alone and corrected to first
+    order (Bonet & Lok 1999): grad v = G L^-1, G = sum_b V_b (v_b - v_a) grad_a W_ab,
+    L = sum_b V_b (x_b - x_a) grad_a W_ab (L = I in the bulk; uncorrected where det L < 0.1).
+    The wall particles' zero velocity would give the first fluid row the gradient u/dx across
+    the viscous sub-layer the wall law stands for (ten times the log layer's u*/(kappa eta) in
+    the tutorial, a hundred times its stress): the wall's stress is the wall law's.
+    """
+
+    name = "mixingLength"
+    doc = ("Prandtl mixing-length eddy viscosity (Pope 2000 §10.3), a Reynolds-averaged "
+           "closure as Violeau & Issa (2007) use for channel flows: "
+           "nu_t = l_m^2 |S|, l_m = kappa eta sqrt(1 - eta/H), eta the distance from the "
+           "wall; stress, divergence and wallLaw as smagorinskySPS")
+
+    class Coeffs(WallLawCoeffs):
+        delta_without_law: ClassVar[bool] = True
+        kappa: float = Field(0.41, gt=0.0, description="von Karman constant kappa of l_m")
+        outerLength: float | None = Field(None, gt=0.0, description="outer length H of "
+                                          "l_m = kappa eta sqrt(1 - eta/H) (m): the half "
+                                          "width of a closed channel, the depth of an open "
+                                          "one; unset: l_m = kappa eta")
+
+    _STRESS = """\
+sps_sxy = 0.5 * (sps_dudy + sps_dvdx)                                  # T(3.59)
+sps_s2 = 2.0 * (sps_dudx * sps_dudx + sps_dvdy * sps_dvdy + 2.0 * sps_sxy * sps_sxy)  # |S|^2
+ml_eta = fld[F_lineDist, a] + turb_mloff              # distance from the physical wall
+ml_r = 1.0 - ml_eta * turb_mlinvh
+ml_l = turb_kappa * ml_eta * math.sqrt(ml_r) if ml_eta > 0.0 and ml_r > 0.0 else 0.0
+sps_nut = ml_l * ml_l * math.sqrt(sps_s2)                              # nu_t = l_m^2 |S|
+sps_iso = -(2.0 / 3.0) * sps_nut * (sps_dudx + sps_dvdy)
+aux[I_turb_txx, a] = 2.0 * sps_nut * sps_dudx + sps_iso
+aux[I_turb_txy, a] = 2.0 * sps_nut * sps_sxy
+aux[I_turb_tyy, a] = 2.0 * sps_nut * sps_dvdy + sps_iso"""
+
+    @property
+    def particle_fields(self) -> tuple[str, ...]:
+        return ("lineDist",) + super().particle_fields
+
+    #: the velocity gradient over the fluid neighbours, corrected to first order
+    _GRAD_INIT = """\
+sps_dudx = 0.0
+sps_dudy = 0.0
+sps_dvdx = 0.0
+sps_dvdy = 0.0
+ml_lxx = 0.0
+ml_lxy = 0.0
+ml_lyx = 0.0
+ml_lyy = 0.0"""
+    _GRAD_PAIR = """\
+if kindb == FLUID:
+    ml_vb = mb / rhob
+    sps_dudx -= ml_vb * u_ab * gWx                 # G = sum_b V_b (v_b - v_a) grad_a W_ab
+    sps_dudy -= ml_vb * u_ab * gWy
+    sps_dvdx -= ml_vb * v_ab * gWx
+    sps_dvdy -= ml_vb * v_ab * gWy
+    ml_lxx -= ml_vb * dx_ab * gWx                  # L = sum_b V_b (x_b - x_a) grad_a W_ab
+    ml_lxy -= ml_vb * dx_ab * gWy
+    ml_lyx -= ml_vb * dy_ab * gWx
+    ml_lyy -= ml_vb * dy_ab * gWy"""
+    _GRAD_FINAL = """\
+ml_det = ml_lxx * ml_lyy - ml_lxy * ml_lyx
+if ml_det > 0.1:                                   # grad v = G L^-1 (exact for a linear v)
+    ml_gux = (sps_dudx * ml_lyy - sps_dudy * ml_lyx) / ml_det
+    sps_dudy = (sps_dudy * ml_lxx - sps_dudx * ml_lxy) / ml_det
+    sps_dudx = ml_gux
+    ml_gvx = (sps_dvdx * ml_lyy - sps_dvdy * ml_lyx) / ml_det
+    sps_dvdy = (sps_dvdy * ml_lxx - sps_dvdx * ml_lxy) / ml_det
+    sps_dvdx = ml_gvx
+"""
+
+    def terms(self):
+        out = super().terms()
+        out[0] = Term("mixingLengthGradient", ("prepass",), init=self._GRAD_INIT,
+                      pair=self._GRAD_PAIR, final=self._GRAD_FINAL + self._STRESS,
+                      applies=("all",), sees=("all",), reads=("gradW", "field.lineDist"),
+                      writes=self._TAU)
+        return out
+
+    def params(self, ctx):
+        c = self.coeffs
+        out = {"turb_kappa": c.kappa,
+               "turb_mlinvh": 1.0 / c.outerLength if c.outerLength else 0.0,
+               "turb_mloff": 0.5 * ctx.dx + c.wallDelta * ctx.dx}
+        return {**out, **self.wall_law_params(ctx)}
+
+    # --- run-time hooks: the wall distance of the moved particles ----------------------------
+    def attach(self, sim):
+        if not sim.segments:
+            raise CaseError.single("system/particleDict", "walls",
+                                   "turbulence mixingLength measures its mixing length from "
+                                   "the walls, and there are none")
+        self._seg = segment_array(sim.segments)
+        self._update(sim)
+
+    def walls_moved(self, sim, offsets, velocities):
+        self._seg = segment_array(sim.segments, offsets, velocities)
+
+    def before_neighbours(self, sim):
+        self._update(sim)
+
+    def keeps_neighbours(self, sim):
+        return True
+
+    def _update(self, sim):
+        st = sim.state
+        line_distance(st.x, st.y, self._seg, st.extra["lineDist"])

@@ -36,7 +36,10 @@ class VelocityProfile(FunctionObject):
     With ``theory poiseuille`` the profiles are compared with the start-up series T(3.42)
     (body force ``F``, viscosity ``nu``), with ``couette`` with T(3.46) (top wall at ``u0``),
     with ``logLaw`` with the velocity-deficit law of a turbulent channel (T Fig 3.15,
-    u* = sqrt(F l / 2) from the force balance, matched to the SPH centreline velocity).
+    matched to the SPH centreline velocity) with u* from the force balance: each wall
+    carries half the body force on the fluid, u*^2 = F M / (2 rho0 L) for a channel periodic
+    over L in x holding the fluid mass M per unit depth (F l/2 when the fluid fills l), or
+    u*^2 = F l/2 when it is not periodic.
     The centreline velocity is the quadratic through the three bins nearest the centre, so
     it is u_max of Poiseuille flow whatever the parity of the number of rows.
     """
@@ -93,6 +96,7 @@ class VelocityProfile(FunctionObject):
             raise ValueError(f"{self.object_name}: theory poiseuille needs nu > 0")
         self.w = float(c.binWidth or ctx.dx)
         self.edges = self.yc = None            # aligned with the particle rows at the first sample
+        self.us_theory = ct.friction_velocity(self.F, c.l)     # until the first sample
         try:
             t0 = float(start_time_name)
         except ValueError:
@@ -157,6 +161,11 @@ class VelocityProfile(FunctionObject):
         w/4 from a wall."""
         c, w = self.coeffs, self.w
         y = state.y[state.kind == FLUID]
+        dom = getattr(getattr(self.case, "particles", None), "domain", None)
+        if dom is not None and "x" in dom.periodic:
+            mass = float(np.sum(state.m[state.kind == FLUID]))
+            self.us_theory = math.sqrt(abs(self.F) * mass /
+                                       (2.0 * self.ctx.rho0 * (dom.max[0] - dom.min[0])))
         inside = (y > c.y0) & (y < c.y0 + c.l)
         phase = 2.0 * np.pi * (y[inside] - c.y0) / w
         s = (math.atan2(np.sin(phase).mean(), np.cos(phase).mean()) / (2.0 * np.pi)) % 1.0 \
@@ -185,8 +194,7 @@ class VelocityProfile(FunctionObject):
         if c.theory == "couette":
             return ct.couette(y, t, c.u0, self.nu, c.l)
         if c.theory == "logLaw" and u_centre is not None:
-            return ct.velocity_deficit(y, u_centre, ct.friction_velocity(self.F, c.l), c.l,
-                                       c.kappa)
+            return ct.velocity_deficit(y, u_centre, self.us_theory, c.l, c.kappa)
         return None
 
     def scale(self) -> float:
@@ -245,12 +253,13 @@ class VelocityProfile(FunctionObject):
         self.samples.append(rec)
 
     def _log_fit(self, u) -> dict:
-        """u* from the slope of u against ln(eta / (l/2)) (the first row at each wall
-        omitted, as in T Fig 3.15), both halves of the channel together."""
+        """u* from the slope of u against ln(eta / (l/2)) (the first row at each wall, the
+        bins within 1.5 w of it, omitted, as in T Fig 3.15), both halves of the channel
+        together."""
         c = self.coeffs
         eta = np.minimum(self.yc - c.y0, c.y0 + c.l - self.yc)
-        sel = np.isfinite(u) & (eta > 1.01 * self.w)
-        out = {"uStarTheory": ct.friction_velocity(self.F, c.l), "uStarFit": float("nan")}
+        sel = np.isfinite(u) & (eta > 1.5 * self.w)
+        out = {"uStarTheory": self.us_theory, "uStarFit": float("nan")}
         if np.count_nonzero(sel) >= 3:
             slope = np.polyfit(np.log(eta[sel] / (0.5 * c.l)), u[sel], 1)[0]
             out["uStarFit"] = float(c.kappa * slope)
@@ -272,8 +281,9 @@ class VelocityProfile(FunctionObject):
                          f"l = {c.l:g} m, y0 = {c.y0:g} m")
         elif c.theory == "logLaw":
             lines.append(f"# theory logLaw (velocity deficit, kappa = {c.kappa:g}): F = "
-                         f"{self.F:g} m/s^2, l = {c.l:g} m, u* = sqrt(F l/2) = "
-                         f"{ct.friction_velocity(self.F, c.l):.6g} m/s")
+                         f"{self.F:g} m/s^2, l = {c.l:g} m, u* from the force balance = "
+                         f"{self.us_theory:.6g} m/s (sqrt(F l/2) = "
+                         f"{ct.friction_velocity(self.F, c.l):.6g})")
         if self.yc is not None:
             lines.append(f"# bins: {self.yc.size} of width {self.w:.6g} m centred on the particle "
                          "rows; u = mean u_x of the fluid particles in a bin"
@@ -325,7 +335,7 @@ class VelocityProfile(FunctionObject):
         elif self.coeffs.theory == "logLaw":
             with self.summary_file.open("w") as fh:
                 fh.write(f"# {self.object_name}: centreline velocity and friction velocity "
-                         "(fitted to the velocity-deficit law, and sqrt(F l/2))\n")
+                         "(fitted to the velocity-deficit law, and from the force balance)\n")
                 fh.write("# time\tuCentre\tuStarFit\tuStarTheory\n")
                 for r in self.samples:
                     fh.write(f"{r['time']:.9g}\t{r['uCentre']:.9g}\t{r['uStarFit']:.9g}\t"
@@ -365,10 +375,10 @@ class VelocityProfile(FunctionObject):
         if log and self.samples:
             r = self.samples[-1]
             ax2 = axes[0, 1]
-            us = ct.friction_velocity(self.F, c.l)
+            us = self.us_theory
             eta = np.minimum(self.yc - c.y0, c.y0 + c.l - self.yc)
             w = self.w
-            sel = np.isfinite(r["u"]) & (eta > 1.01 * w)
+            sel = np.isfinite(r["u"]) & (eta > 1.5 * w)
             ax2.plot(np.log(eta[sel] / (0.5 * c.l)), (r["u"][sel] - r["uCentre"]) / us, "o",
                      ms=3.5, label=f"SPH, t = {r['time']:.4g} s")
             z = np.linspace(np.log(w / c.l), 0.0, 50)

@@ -16,6 +16,7 @@ from scipy.spatial import cKDTree
 
 from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.models.mirror import line_distance, segment_array
 from sphfoam.setup.geometry import (distance_to_walls, fluid_side, lattice_offsets,
                                     polylines_of, segments_of, wall_metadata)
 from sphfoam.setup.waves import fields as wave_fields
@@ -157,7 +158,9 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     motions displace. ``waves`` (pairs of InitialWave and theory model, from
     ``constant/waveProperties``) put solitary waves on every box of still water, with their
     velocity and pressure (sphfoam.setup.waves). ``fields``: further per-wall-particle fields
-    other selected models read (e.g. the normal ``nx``, ``ny`` of the turbulent wall law).
+    other selected models read (e.g. the normal ``nx``, ``ny`` of the turbulent wall law;
+    ``lineDist``, every particle's signed distance to the nearest wall line, of the mixing
+    length).
     """
     dx = pd.dx
     placement = getattr(boundary, "wall_placement", "rows")
@@ -254,6 +257,11 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
             meta["nFull"] = full_pairs(segs, xw, yw, dx, support_radius)
         for k in wanted:
             extra[k] = np.concatenate([np.zeros(xf.size), meta[k]])
+    if "lineDist" in fields:
+        # signed distance to the nearest wall line (the mixing length's wall distance)
+        dist = np.zeros(x.size)
+        line_distance(x, y, segment_array(segs), dist)
+        extra["lineDist"] = dist
     if moving:
         extra["patch"] = np.concatenate([np.full(xf.size, -1.0), pw.astype(float)])
         extra["x0"] = x.copy()
