@@ -244,9 +244,11 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
     """tutorials/solitaryBeach scaled down to run in seconds: d = 0.1 m, d/dx = 5, a steeper
     wave (H/d = 0.5 from the Goring paddle, 0.5 m before the toe) on the 5° beach, which
     plunges (Grilli's slope parameter S0 = 1.521 tan(5°)/sqrt(H/d) = 0.19, plunging for
-    0.025 < S0 < 0.3), with the tutorial's models (hybrid walls, SPS with the wall law) and
+    0.025 < S0 < 0.3), with the tutorial's models (free-slip mirror ghosts, no SPS) and
     its settling (0.2 s here). The run-up (the tutorial's `shoreline onBeach`) is written,
-    positive and consistent with its x on the beach; the breaking point by the tutorial's kinematic criterion is found on the
+    consistent with its x on the beach and above half the depth (0.71 d when written: the
+    tongue rises to its maximum at about 3.3 s; the tutorial's earlier hybrid walls with SPS
+    and the wall law stopped it at 0.1 d, issue 14); the breaking point by the tutorial's kinematic criterion is found on the
     beach after the crest passed the toe gauge and before the maximum run-up; the geometric one is not measured (the
     crest stands 2.5 dx high: its face is less than dx high, NaN by design), and the
     tutorial's metrics evaluate. (At d/dx = 5 the crest particles outrun the crest only in
@@ -271,7 +273,7 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
         "system/particleDict:walls.paddle.motion.waveMaker.height": 0.5 * d,
         "system/particleDict:walls.paddle.motion.waveMaker.depth": d,
         "constant/sphProperties:equationOfState.vmax": math.sqrt(9.81 * 1.5 * d),
-        "system/controlDict:endTime": 3.0,
+        "system/controlDict:endTime": 4.0,
         "system/controlDict:settling.endTime": 0.2,         # sound crosses in 0.1 s
         "system/controlDict:writeInterval": 1.25,
         "system/controlDict:functions.toe.x": [toe - 0.15],
@@ -304,9 +306,7 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
     shore = np.loadtxt(pp / "shoreline/0/shoreline.dat", ndmin=2)
     i = int(np.nanargmax(shore[:, 1]))
     still_shore = toe + d / math.tan(math.radians(5))
-    # (d/dx = 5 runs up only ~0.1 d: the tongue is thinner than a particle; the tutorial's
-    # docs/solitary-beach.md has the resolution dependence)
-    assert shore[i, 1] > 0.05 * d                          # the tongue ran up the beach,
+    assert shore[i, 1] > 0.5 * d                           # the tongue ran up the beach,
     assert shore[i, 4] > still_shore + 0.05                # beyond the still shoreline
     assert shore[i, 1] == pytest.approx((shore[i, 4] - toe) * math.tan(math.radians(5)) - d)
     assert toe < k["x"] <= toe + length * math.cos(math.radians(5))
