@@ -230,10 +230,9 @@ _HALF_SELECTIONS = {
     "damBreak": {},
     # the flume's laminar viscosity T(3.38)
     "laminar": {"constant/sphProperties:viscosity": {"type": "laminar"}},
-    # P's configuration: finite Gaussian, XSPH (its prepass and pair cache), mirror ghosts
-    "wall": {"constant/sphProperties:kernel": {"type": "gaussian", "hdx": 1.33},
-             "constant/sphProperties:velocityCorrection": {"type": "xsph"},
-             "constant/sphProperties:boundary": {"type": "mirrorGhosts", "noSlip": False}},
+    # the finite Gaussian with mirror ghosts (P's kernel and walls)
+    "mirror": {"constant/sphProperties:kernel": {"type": "gaussian", "hdx": 1.33},
+               "constant/sphProperties:boundary": {"type": "mirrorGhosts", "noSlip": False}},
 }
 
 
@@ -279,10 +278,10 @@ def test_half_lists_give_the_gather_sums_to_round_off(tutorial, name):
 
 
 def test_half_lists_only_where_every_term_mirrors(tutorial):
-    """A term without a reaction or parity (C-SPH's corrected gradient in both passes, a
-    repulsive wall force or the switched artificial viscosity in the rates) or a periodic
-    axis keeps the gather over full lists for that pass; XSPH's corrected continuity velocity
-    is odd and keeps the half lists."""
+    """A term without a reaction or parity (XSPH's corrected continuity velocity and C-SPH's
+    corrected gradient in both passes, a repulsive wall force or the switched artificial
+    viscosity in the rates) or a periodic axis keeps the gather over full lists for that
+    pass."""
     from sphfoam.engine.codegen import Assembly
 
     for edits, density in (({"constant/sphProperties:viscosity": {"type": "improvedArtificial"}},
@@ -299,6 +298,26 @@ def test_half_lists_only_where_every_term_mirrors(tutorial):
     xsph = _sim(tutorial, "damBreak", {"system/particleDict:dx": 0.04,
                                        "constant/sphProperties:velocityCorrection":
                                        {"type": "xsph"}})
-    assert xsph.pipeline.rates_half is not None and xsph.pipeline.density_half is not None
+    assert xsph.pipeline.rates_half is None and xsph.pipeline.density_half is None
     sel = _sim(tutorial, "poiseuille", {}).pipeline.selection
     assert sel.periodic_x and Assembly(sel).half_terms("rates") is None
+
+
+def test_reaction_and_parity_declarations_are_checked():
+    """parity is 'even' or 'odd', of a definer or corrector of pair quantities only; a
+    reaction belongs to a term with pair code of its own."""
+    from sphfoam.engine import terms as T
+    from sphfoam.engine.terms import ContractError, Term
+
+    with pytest.raises(ContractError, match="parity"):
+        T.check([Term("w", ("rates",), pair="Wab = 1.0", writes=("W",), parity="both")],
+                set(), {})
+    with pytest.raises(ContractError, match="parity"):
+        T.check([Term("p", ("rates",), pair="acc_x += 1.0", writes=("acc",), parity="odd")],
+                set(), {})
+    with pytest.raises(ContractError, match="reaction"):
+        T.check([Term("r", ("rates",), init="s = 0.0", writes=("acc",),
+                      reaction="acc_b_x += 1.0")], set(), {})
+    T.check([Term("g", ("rates",), pair="gWx = dx_ab", writes=("gradW",), parity="odd"),
+             Term("a", ("rates",), pair="acc_x -= gWx", reads=("gradW",), writes=("acc",),
+                  reaction="acc_b_x += gWx")], set(), {})
