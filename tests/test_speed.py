@@ -321,3 +321,26 @@ def test_reaction_and_parity_declarations_are_checked():
     T.check([Term("g", ("rates",), pair="gWx = dx_ab", writes=("gradW",), parity="odd"),
              Term("a", ("rates",), pair="acc_x -= gWx", reads=("gradW",), writes=("acc",),
                   reaction="acc_b_x += gWx")], set(), {})
+
+
+def test_half_lists_give_the_same_results_with_one_and_two_threads(tutorial):
+    """The bands of the half-list loops do not depend on the thread count, so neither does
+    the order of any sum: 30 steps with one and with two threads are bit for bit equal."""
+    import numba
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("needs NUMBA_NUM_THREADS >= 2")
+    before = numba.get_num_threads()
+    out = {}
+    try:
+        for threads in (1, 2):
+            numba.set_num_threads(threads)
+            sim = _sim(tutorial, "damBreak", {"system/particleDict:dx": 0.02})
+            for _ in range(30):
+                sim.step()
+            assert sim._half is not None
+            out[threads] = _real(sim)
+    finally:
+        numba.set_num_threads(before)
+    for k in out[1]:
+        assert np.array_equal(out[1][k], out[2][k]), k

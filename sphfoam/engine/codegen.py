@@ -20,7 +20,6 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numba
 import numpy as np
 
 import sphfoam
@@ -28,6 +27,12 @@ from sphfoam.cachedir import cache_root
 from sphfoam.engine import terms as T
 from sphfoam.engine.fastmath import FASTMATH_SOURCE
 from sphfoam.engine.neighbours import half_lists
+
+#: bands of cell rows of the half-list loops (about equal particle counts): numba's prange
+#: hands each thread an equal share of the bands of a colour, so 64 balance up to 16
+#: threads; a fixed number (not one per thread) keeps every sum's order, and so the
+#: results, the same whatever the thread count
+HALF_BANDS = 64
 
 #: the fixed scalar slots every pipeline reads from ``prm`` before the models' own
 CORE_PARAMS = ("h", "inv_h", "support2", "eta2", "gx", "gy")
@@ -958,10 +963,8 @@ class Pipeline:
             buf = np.empty(size, dtype=np.uint32)
         else:
             buf = half.base
-        # bands of about equal particle counts, 16 per thread: numba's prange hands each
-        # thread an equal share of the bands of a colour
         nb = half_lists(nb_start, nb_idx, cells.cell_start, cells.ncx, cells.ncy,
-                        16 * numba.config.NUMBA_NUM_THREADS, buf[:n], buf[n:])
+                        HALF_BANDS, buf[:n], buf[n:])
         return buf[:n + nb + 1] if nb else None
 
     @property
