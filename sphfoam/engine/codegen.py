@@ -26,6 +26,13 @@ import sphfoam
 from sphfoam.cachedir import cache_root
 from sphfoam.engine import terms as T
 from sphfoam.engine.fastmath import FASTMATH_SOURCE
+from sphfoam.engine.neighbours import half_lists
+
+#: bands of cell rows of the half-list loops (about equal particle counts): numba's prange
+#: hands each thread an equal share of the bands of a colour, so 64 balance up to 16
+#: threads; a fixed number (not one per thread) keeps every sum's order, and so the
+#: results, the same whatever the thread count
+HALF_BANDS = 64
 
 #: the fixed scalar slots every pipeline reads from ``prm`` before the models' own
 CORE_PARAMS = ("h", "inv_h", "support2", "eta2", "gx", "gy")
@@ -168,6 +175,29 @@ for k in range(nb_start[a], nb_start[a + 1]):
     q = math.sqrt(r2) * inv_h
 {body}
 """
+
+
+#: the half-list loop of particle a: its listed neighbours b > a (from ``half[a]`` on)
+_HALF = """\
+for k in range(half[a], nb_start[a + 1]):
+    b = nb_idx[k]
+    dx_ab = xa - x[b]
+    dy_ab = ya - y[b]
+    r2 = dx_ab * dx_ab + dy_ab * dy_ab
+    if r2 >= support2 or r2 == 0.0:   # beyond the support now, or coincident (grad W = 0)
+        continue
+    q = math.sqrt(r2) * inv_h
+{body}
+"""
+
+#: T(3.89) in the half-list loop: s_ab is the same for (a, b) and (b, a); fluid particles only
+_SIGMA_HALF = """\
+if kinda == FLUID or kindb == FLUID:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    if kinda == FLUID and s_ab > sigma_a:
+        sigma_a = s_ab
+    if kindb == FLUID and s_ab > out_sigma[b]:
+        out_sigma[b] = s_ab"""
 
 
 class Assembly:
@@ -333,7 +363,9 @@ class Assembly:
             code += "\n" + _SIGMA
         return code
 
-    def _dispatch(self, rest: list) -> str:
+    def _dispatch(self, rest: list, i: str = "b", part: str = "pair") -> str:
+        """The ``part`` code of ``rest`` by the kind of neighbour ``i`` ("b"; "a" for the
+        reactions of the half-list loops, where a is b's neighbour)."""
         if not rest:
             return ""
         sees = {id(t): self.sees(t) for t in rest}
@@ -344,8 +376,10 @@ class Assembly:
                 raise T.ContractError(f"{a.who()} sees every neighbour but {b.who()} in the "
                                       "same loop sees only some kinds; they cannot share a "
                                       "loop")
-            return "\n".join(expand_components(t.pair) for t in rest if t.pair)
-        per_kind = {k: [t for t in rest if k in sees[id(t)] and t.pair] for k in self.kinds}
+            return "\n".join(expand_components(getattr(t, part)) for t in rest
+                             if getattr(t, part))
+        per_kind = {k: [t for t in rest if k in sees[id(t)] and getattr(t, part)]
+                    for k in self.kinds}
         groups: list[tuple[list[str], list]] = []
         for k, ts in per_kind.items():
             for g in groups:
@@ -358,19 +392,19 @@ class Assembly:
         if not groups:
             return ""
         if len(groups) == 1 and set(groups[0][0]) == set(self.kinds) and self.complete:
-            return "\n".join(expand_components(t.pair) for t in groups[0][1])
+            return "\n".join(expand_components(getattr(t, part)) for t in groups[0][1])
         order = list(self.kinds)
         out = []
         for gi, (ks, ts) in enumerate(groups):
             later = [j for g in groups[gi + 1:] for j in g[0]]
             conds = []
             for k in ks:
-                c = self._cond(k, "b")
-                excl = [self._cond(j, "b") for j in later if order.index(j) < order.index(k)]
+                c = self._cond(k, i)
+                excl = [self._cond(j, i) for j in later if order.index(j) < order.index(k)]
                 if excl:
                     c = f"({c}) and not ({' or '.join(excl)})"
                 conds.append(c)
-            body = "\n".join(expand_components(t.pair) for t in ts)
+            body = "\n".join(expand_components(getattr(t, part)) for t in ts)
             kw = "if" if gi == 0 else "elif"
             covered = {j for g in groups for j in g[0]} == set(self.kinds)
             if gi == len(groups) - 1 and gi > 0 and covered and self.complete:
@@ -477,6 +511,98 @@ class Assembly:
         if self.kinds["wetWall"] == "else":
             return body
         return f"if {cond}:\n" + _indent(body)
+
+    # --- half lists ------------------------------------------------------------------------
+    def half_terms(self, stage: str):
+        """(fluid terms, wet-wall terms) of ``stage`` when each of its pairs can be evaluated
+        once for both particles (every term with pair code declares its ``reaction``, none
+        has ``final`` code, every definer of a pair quantity its ``parity``; no periodic
+        axis), else None: then the stage is only the gather over full lists."""
+        if self.sel.periodic_x or self.sel.periodic_y:
+            return None
+        fluid = self.needed(self.stage(stage, "fluid"))
+        wet = []
+        if "wetWall" in self.kinds:
+            ts = [t for t in self.stage(stage, "wetWall") if t.pair or t.init or t.final]
+            if [t for t in ts if not t.on_demand]:
+                wet = self.needed(ts)
+        own = [t for t in fluid + wet if not t.on_demand]
+        if not own:
+            return None
+        for t in fluid + wet:
+            if t.on_demand or t.corrects:
+                if not t.parity or set(t.corrects) - T.PAIR_QUANTITIES:
+                    return None
+            elif t.final or (t.pair and not t.reaction):
+                return None
+        if wet:
+            # the pair quantities are made once per pair, for both particles: a corrector
+            # must act for fluid and wet-wall particles alike
+            f_ids, w_ids = {id(t) for t in fluid}, {id(t) for t in wet}
+            if any(t.corrects and (id(t) in f_ids) != (id(t) in w_ids) for t in fluid + wet):
+                return None
+        return fluid, wet
+
+    def half_loop(self, stage: str, sigma: bool = False) -> str | None:
+        """Body of the half-list loop of particle a (see ``rates_half``): for each listed
+        b > a the pair quantities once, a's terms (by the kind of b) into a's sums, b's
+        reactions (by the kind of a) into ``acc_b_@``/``drho_b``, added to b's outputs."""
+        sel = self.half_terms(stage)
+        if sel is None:
+            return None
+        fluid, wet = sel
+        ids = {id(t) for t in fluid + wet}
+        terms = [t for t in self.terms if id(t) in ids]          # the global order
+        pre = [t for t in terms if t.on_demand or t.corrects]    # (correctors: with parity)
+        cache = "read" if self.cache else None
+        pre_code = []
+        for t in pre:
+            code = t.pair
+            if cache and code:
+                for n in t.cache:
+                    if n in self.cache:
+                        code = re.sub(rf"(?m)^{re.escape(n)} = .*$", f"{n} = pc[J_{n}, k]",
+                                      code)
+            if code:
+                pre_code.append(expand_components(code))
+        own = [t for t in fluid if not t.on_demand and not t.corrects]
+        own_wet = [t for t in wet if not t.on_demand and not t.corrects]
+        common = []
+        if wet and self.kinds["wetWall"] == "else":
+            # every particle that is not fluid is a wet wall: the terms of both run for
+            # every particle, outside the branch on its kind
+            wet_ids = {id(t) for t in own_wet}
+            common = [t for t in own if id(t) in wet_ids]
+            own = [t for t in own if id(t) not in wet_ids]
+            own_wet = [t for t in own_wet if id(t) not in {id(c) for c in common}]
+        side_a, side_b = [], []
+        if common:
+            side_a.append(self._dispatch(common))
+            side_b.append(self._dispatch(common, "a", "reaction"))
+        if own or own_wet:
+            for side, i, part in ((side_a, "b", "pair"), (side_b, "a", "reaction")):
+                kind = "kinda" if i == "b" else "kindb"
+                code = f"if {kind} == FLUID:\n" + _indent(self._dispatch(own, i, part)
+                                                          or "pass")
+                if own_wet:
+                    wet_code = self._dispatch(own_wet, i, part) or "pass"
+                    if self.kinds["wetWall"] != "else":
+                        wet_code = (f"if {self._cond('wetWall', 'a' if i == 'b' else 'b')}:\n"
+                                    + _indent(wet_code))
+                    code += "\nelse:\n" + _indent(wet_code)
+                side.append(code)
+        side_a, side_b = "\n".join(x for x in side_a if x), "\n".join(x for x in side_b if x)
+        body = [_NEIGHBOUR_LOAD + "\n".join(pre_code),
+                "acc_b_x = 0.0\nacc_b_y = 0.0\ndrho_b = 0.0", side_a or "pass",
+                side_b or "pass"]
+        if sigma:
+            body.append(_SIGMA_HALF)
+        if stage == "rates":
+            body.append("out_ax[b] += acc_b_x\nout_ay[b] += acc_b_y")
+        body.append("out_drho[b] += drho_b")
+        loop = _HALF.format(body=_block("\n".join(body), 4))
+        init = self.particle_code(terms, "init")
+        return "\n".join(x for x in (init, loop) if x)
 
 
 def expand_components(code: str) -> str:
@@ -658,6 +784,44 @@ def density_filter({_ARGS}, out_rho):
 {_block(asm.gather(filt), 12)}
         out_rho[a] = rho_new
 ''')
+    for stage, name, outs in (("rates", "rates_half", "out_ax, out_ay, out_drho, out_sigma"),
+                              ("density", "density_half", "out_drho")):
+        body = asm.half_loop(stage, sigma=stage == "rates" and sel.adjust_time_step)
+        if body is None:
+            continue
+        zero = "\n".join(f"{o}[a] = 0.0" for o in outs.split(", "))
+        if stage == "rates":
+            start = "acc_x = 0.0\nacc_y = 0.0\ndrho_a = 0.0\nsigma_a = 0.0"
+            end = ("if kinda == FLUID:\n    acc_x += gx\n    acc_y += gy\n"
+                   "out_ax[a] += acc_x\nout_ay[a] += acc_y\nout_drho[a] += drho_a\n"
+                   "if sigma_a > out_sigma[a]:\n    out_sigma[a] = sigma_a")
+        else:
+            start = "drho_a = 0.0"
+            end = "out_drho[a] += drho_a"
+        parts.append(f'''
+
+@njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
+def {name}({_ARGS}, half, {outs}):
+    """{"rates" if stage == "rates" else "density_rate"} over half lists, the same sums in another order: each
+    listed pair a < b once, for both particles (the terms' reactions). half[a] (a < n) is
+    where the neighbours b > a start in a's list and half[n + i] the first particle of band
+    i (consecutive cell rows): the bands run in two colours, so that no two threads write
+    the same particle (a's neighbours b > a lie in a's band or the next)."""
+{_block(bind, 4)}
+    for a in prange(x.shape[0]):
+{_block(zero, 8)}
+    n = x.shape[0]
+    for colour in range(2):
+        for band in prange((half.shape[0] - n - colour) // 2):
+            ib = n + 2 * band + colour
+            for a in range(half[ib], half[ib + 1]):
+{_block(_PARTICLE_LOAD, 16)}
+                ma = m[a]
+                kinda = kind[a]
+{_block(start, 16)}
+{_block(body, 16)}
+{_block(end, 16)}
+''')
     src = "".join(parts)
     if sel.precision == "single":
         src = single_precision(src, imports)
@@ -671,7 +835,7 @@ _FLOAT_LITERAL = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\
 #: functions whose loops run in the working precision (not the cell walk, which bins and
 #: measures positions in double)
 _SINGLE_FUNCS = ("equation_of_state", "prepass", "rates", "density_rate", "step_pass",
-                 "density_filter")
+                 "density_filter", "rates_half", "density_half")
 
 
 def single_precision(src: str, imports) -> str:
@@ -777,9 +941,41 @@ class Pipeline:
         np.cumsum(count, out=start[1:])
         total = int(start[-1])
         if idx is None or idx.shape[0] < total:
-            idx = np.empty(int(total * 1.1) + 16, dtype=np.int32)
+            idx = np.empty(int(total * 1.1) + 16, dtype=np.uint32)
         self.module.fill_neighbours(*args, start, idx)
         return start, idx
+
+    def half_lists(self, nb_start, nb_idx, cells, half=None):
+        """The array ``half`` of the half-list loops ``rates_half``/``density_half``: where
+        each particle's neighbours b > a start in its list, then the first particle of each
+        cell row (see :func:`sphfoam.engine.neighbours.half_lists`); None when the selection
+        has no such loops or the list does not allow them. ``half`` is reused if it fits.
+        (One array, not two: the loops then take 19 arguments, and CPython keeps freed
+        tuples of up to 20 items, which the no-allocation check of tests/test_speed.py
+        would count.)"""
+        if self.rates_half is None and self.density_half is None:
+            return None
+        n = nb_start.shape[0] - 1
+        size = n + cells.ncy + 1
+        if nb_start[-1] >= 2 ** 32:
+            return None
+        if half is None or half.base is None or half.base.shape[0] != size:
+            buf = np.empty(size, dtype=np.uint32)
+        else:
+            buf = half.base
+        nb = half_lists(nb_start, nb_idx, cells.cell_start, cells.ncx, cells.ncy,
+                        HALF_BANDS, buf[:n], buf[n:])
+        return buf[:n + nb + 1] if nb else None
+
+    @property
+    def rates_half(self):
+        """``rates`` over half lists, or None when a selected term has no reaction."""
+        return getattr(self.module, "rates_half", None)
+
+    @property
+    def density_half(self):
+        """``density_rate`` over half lists, or None."""
+        return getattr(self.module, "density_half", None)
 
     @property
     def prepass(self):
@@ -884,7 +1080,7 @@ def _warm_up(module, prm):
     # sized from the count: with periodic axes the single cell is walked 3 x 3 times, so
     # each particle finds its neighbour up to nine times (a fixed list of two overflowed)
     nb_start = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
-    nb_idx = np.zeros(int(nb_start[-1]), dtype=np.int32)
+    nb_idx = np.zeros(int(nb_start[-1]), dtype=np.uint32)
     module.fill_neighbours(*grid, nb_start, nb_idx)
     args = (x, y, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
     if getattr(module, "PAIR_CACHE", ()):
@@ -902,4 +1098,11 @@ def _warm_up(module, prm):
     if hasattr(module, "step_pass"):
         module.step_pass(*args)
         funcs.append(module.step_pass)
+    half = np.array([0] * n + [0, n], dtype=np.uint32)
+    if hasattr(module, "rates_half"):
+        module.rates_half(*args, half, f.copy(), f.copy(), f.copy(), f.copy())
+        funcs.append(module.rates_half)
+    if hasattr(module, "density_half"):
+        module.density_half(*args, half, f.copy())
+        funcs.append(module.density_half)
     return funcs

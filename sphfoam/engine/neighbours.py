@@ -145,3 +145,39 @@ class CellList:
         order = np.empty(cell.shape[0], dtype=np.int64)
         counting_sort(cell, self.ncells, order, self.cell_start)
         return order
+
+
+@njit(cache=True)
+def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start):
+    """Split the neighbour list for the half-list loops: ``nb_mid[a]`` is where the
+    neighbours b > a of particle a start in its list; the cell rows are grouped into about
+    ``bands`` bands of consecutive rows holding about as many particles each, and
+    ``band_start[i]`` is the first particle of band i (``band_start[nb]`` = n). Returns the
+    number of bands nb; 0 unless, as the cell walk of particles sorted by cell makes them,
+    every list holds its b < a before its b > a and every b > a lies in a's cell row or the
+    next (so in a's band or the next): the loops then gather over the full lists."""
+    n = nb_start.shape[0] - 1
+    if cell_start[ncy * ncx] != n:
+        return 0
+    for r in range(ncy):
+        top = cell_start[min(r + 2, ncy) * ncx]
+        for a in range(cell_start[r * ncx], cell_start[(r + 1) * ncx]):
+            k = nb_start[a]
+            k1 = nb_start[a + 1]
+            while k < k1 and nb_idx[k] < a:
+                k += 1
+            nb_mid[a] = k
+            while k < k1:
+                b = nb_idx[k]
+                if b <= a or b >= top:
+                    return 0
+                k += 1
+    target = max(n // max(bands, 1), 1)
+    nb = 0
+    band_start[0] = 0
+    for r in range(1, ncy + 1):
+        first = cell_start[r * ncx]
+        if first - band_start[nb] >= target or r == ncy:
+            nb += 1
+            band_start[nb] = first
+    return nb

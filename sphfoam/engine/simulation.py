@@ -97,6 +97,12 @@ class Simulation:
         self._pc = None
         #: (nb_start, nb_idx) of the current step (sphfoam.engine.codegen.Pipeline)
         self._nb = (None, None)
+        #: evaluate the rates and density passes over half lists (each pair once, for both
+        #: particles) where the selection and the list allow it (``Pipeline.half_lists``);
+        #: False: always the gather over full lists (the same sums in another order)
+        self.half_lists = True
+        #: the current list's array for the half-list loops (``Pipeline.half_lists``), or None
+        self._half = None
         #: positions at the last build of the list (None: rebuild at the next step)
         self._ref = None
         self.list_built = 0
@@ -210,6 +216,8 @@ class Simulation:
                                                 *self._nb)
         self._ref = (st.x.copy(), st.y.copy())
         self.list_built += 1
+        self._half = (self.pipeline.half_lists(*self._nb, self.cells, self._half)
+                      if self.half_lists else None)
 
     def _grid_args(self):
         st = self.state
@@ -268,13 +276,20 @@ class Simulation:
         self._run_hooks("before_evaluation")
         args = self._grid_args()
         self._prepass(args)
-        self.pipeline.rates(*args, st.ax, st.ay, st.drho, st.sigma)
+        if self.half_lists and self._half is not None and self.pipeline.rates_half is not None:
+            self.pipeline.rates_half(*args, self._half, st.ax, st.ay, st.drho, st.sigma)
+        else:
+            self.pipeline.rates(*args, st.ax, st.ay, st.drho, st.sigma)
 
     def density_rate(self):
         self._run_hooks("before_evaluation")
         args = self._grid_args()
         self._prepass(args)
-        self.pipeline.density_rate(*args, self.state.drho)
+        if self.half_lists and self._half is not None and \
+                self.pipeline.density_half is not None:
+            self.pipeline.density_half(*args, self._half, self.state.drho)
+        else:
+            self.pipeline.density_rate(*args, self.state.drho)
 
     def time_step(self) -> float:
         if not self.adjust_time_step:

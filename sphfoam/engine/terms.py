@@ -105,6 +105,18 @@ class Term:
     #: them once per evaluation, in the prepass, and let the later loops of that evaluation
     #: read them from a per-pair array instead (the kernel value and gradient factor)
     cache: tuple[str, ...] = ()
+    #: the half-list evaluation (each pair a < b once, for both particles): the pair code of
+    #: this term's contribution to particle b, i.e. its ``pair`` code for the pair (b, a),
+    #: accumulated into ``acc_b_@`` / ``drho_b`` and written with the quantities of (a, b)
+    #: (``gW@`` = grad_a W_ab, ``u_ab``, ``d@_ab``, b's neighbour a: ``ma``, ``rhoa``, ...);
+    #: the quantities of (b, a) follow from their definers' ``parity``. A stage whose terms
+    #: with pair code do not all have one (or that has ``final`` code) keeps the gather
+    reaction: str = ""
+    #: of a definer or corrector of pair quantities: "even" when those of the pair (b, a)
+    #: equal those of (a, b) (the kernel value), "odd" when they are their negatives (grad W,
+    #: uc, XSPH's corrected uc); "" (e.g. a kernel correction, which depends on a's moment
+    #: matrix alone) keeps the gather
+    parity: str = ""
     #: the model that contributed it (set by :func:`collect`)
     owner: object = field(default=None, compare=False)
 
@@ -184,6 +196,14 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
     for c, t in correctors.items():
         if c not in definers:
             raise ContractError(f"{t.who()} corrects {c!r}, which no selected model defines")
+    for t in terms:
+        pair_q = t.on_demand or bool(set(t.corrects) & PAIR_QUANTITIES)
+        if t.parity not in ("", "even", "odd") or (t.parity and not pair_q):
+            raise ContractError(f"{t.who()} declares parity {t.parity!r}: only a definer or "
+                                "corrector of pair quantities may, as 'even' or 'odd'")
+        if t.reaction and (t.on_demand or not t.pair):
+            raise ContractError(f"{t.who()} declares a reaction but has no pair code of its "
+                                "own to mirror")
     for t in terms:
         for name in t.cache:
             if not t.on_demand or t.reads:

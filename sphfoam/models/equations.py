@@ -16,12 +16,14 @@ class Continuity(PipelineModel):
     prefix = "cont_"
     #: drho_a += ..., per neighbour (reads grad W and the continuity velocity uc_ab, vc_ab)
     drho_code: str
+    #: drho_b += the same term for the pair (b, a) (uc_ba . grad_b W_ba = uc_ab . grad_a W_ab)
+    reaction_code: str = ""
 
     def terms(self):
         return [Term("continuityVelocity", pair="U@c_ab = U@_ab", writes=("uc",),
-                     **_CONTINUITY),
+                     parity="odd", **_CONTINUITY),
                 Term("continuity", pair=self.drho_code, reads=("gradW", "uc"),
-                     writes=("drho",), **_CONTINUITY)]
+                     writes=("drho",), reaction=self.reaction_code, **_CONTINUITY)]
 
 
 @register
@@ -29,6 +31,7 @@ class DifferenceForm(Continuity):
     name = "differenceForm"
     doc = "drho_a/dt = sum_b m_b v_ab . grad_a W_ab, T(3.18)"
     drho_code = "drho_a += mb * (uc_ab * gWx + vc_ab * gWy)"
+    reaction_code = "drho_b += ma * (uc_ab * gWx + vc_ab * gWy)"
 
 
 @register
@@ -36,6 +39,7 @@ class DensityWeighted(Continuity):
     name = "densityWeighted"
     doc = "drho_a/dt = rho_a sum_b (m_b / rho_b) v_ab . grad_a W_ab, T(3.17)"
     drho_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
+    reaction_code = "drho_b += rhob * ma / rhoa * (uc_ab * gWx + vc_ab * gWy)"
 
 
 class Momentum(PipelineModel):
@@ -45,10 +49,13 @@ class Momentum(PipelineModel):
     init_code: str = ""
     #: lines run inside the pair loop, adding the pressure term to acc_@
     pair_code: str
+    #: the term of the pair (b, a), added to acc_b_@ (grad_b W_ba = -grad_a W_ab)
+    reaction_code: str = ""
 
     def terms(self):
         return [Term("pressureGradient", ("rates",), init=self.init_code,
-                     pair=self.pair_code, reads=("gradW",), writes=("acc",))]
+                     pair=self.pair_code, reads=("gradW",), writes=("acc",),
+                     reaction=self.reaction_code)]
 
 
 @register
@@ -58,6 +65,8 @@ class Symmetric(Momentum):
     init_code = "pa_rho2 = pa / (rhoa * rhoa)"
     pair_code = ("pterm = mb * (pa_rho2 + pb / (rhob * rhob))\n"
                  "acc_@ -= pterm * gW@")
+    reaction_code = ("pterm_b = ma * (pb / (rhob * rhob) + pa_rho2)\n"
+                     "acc_b_@ += pterm_b * gW@")
 
 
 @register
@@ -66,3 +75,5 @@ class ColagrossiLandrini(Momentum):
     doc = "dv_a/dt = -sum_b m_b (p_a + p_b)/(rho_a rho_b) grad_a W_ab, T(3.25)"
     pair_code = ("pterm = mb * (pa + pb) / (rhoa * rhob)\n"
                  "acc_@ -= pterm * gW@")
+    reaction_code = ("pterm_b = ma * (pb + pa) / (rhob * rhoa)\n"
+                     "acc_b_@ += pterm_b * gW@")

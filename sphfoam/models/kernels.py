@@ -146,10 +146,10 @@ class Kernel(PipelineModel):
     def terms(self):
         """W_ab and grad_a W_ab = alpha_d / h^4 (df/dq / q) r_ab, wherever a term reads them."""
         return [Term("kernelValue", LOOP_STAGES, pair="Wab = kern_w * kernel_f(q)",
-                     applies=("all",), writes=("W",), cache=("Wab",)),
+                     applies=("all",), writes=("W",), cache=("Wab",), parity="even"),
                 Term("kernelGradient", LOOP_STAGES,
                      pair="fw = kern_gw * kernel_dfdq_q(q)\ngW@ = fw * d@_ab",
-                     applies=("all",), writes=("gradW",), cache=("fw",))]
+                     applies=("all",), writes=("gradW",), cache=("fw",), parity="odd")]
 
     def h(self, dx: float) -> float:
         """Smoothing length h = hdx dx."""

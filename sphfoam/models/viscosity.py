@@ -24,12 +24,15 @@ class Viscosity(PipelineModel):
     #: per particle a before its loop
     init_code: str = ""
     reads: tuple[str, ...] = ("gradW",)
+    #: the term of the pair (b, a), added to acc_b_@ ("" = the gather only)
+    reaction_code: str = ""
 
     def terms(self):
         if not self.pair_code:
             return []
         return [Term("viscosity", ("rates",), init=self.init_code, pair=self.pair_code,
-                     sees=VISCOUS_SEES, reads=self.reads, writes=("acc",))]
+                     sees=VISCOUS_SEES, reads=self.reads, writes=("acc",),
+                     reaction=self.reaction_code)]
 
 
 @register
@@ -58,6 +61,10 @@ class Artificial(Viscosity):
     pair_code = ("if vdotr < 0.0:\n"
                  "    pi_ab = -visc_alpha * h * (ca + cb) / (rhoa + rhob) * vdotr / (r2 + eta2)\n"
                  "    acc_@ -= mb * pi_ab * gW@")
+    # Pi_ba = Pi_ab (v_ba . r_ba = v_ab . r_ab), grad_b W_ba = -grad_a W_ab
+    reaction_code = ("if vdotr < 0.0:\n"
+                     "    pi_ba = -visc_alpha * h * (cb + ca) / (rhob + rhoa) * vdotr / (r2 + eta2)\n"
+                     "    acc_b_@ += ma * pi_ba * gW@")
 
 
 @register
@@ -83,6 +90,10 @@ class Laminar(Viscosity):
 
     pair_code = ("lam = mb * visc_mu2 / (rhoa * rhob) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)\n"
                  "acc_@ += lam * U@_ab")
+    # r_ba . grad_b W_ba = r_ab . grad_a W_ab, v_ba = -v_ab
+    reaction_code = ("lam_b = ma * visc_mu2 / (rhob * rhoa) * (dx_ab * gWx + dy_ab * gWy) / "
+                     "(r2 + eta2)\n"
+                     "acc_b_@ -= lam_b * U@_ab")
 
 
 #: SPH velocity gradient of particle a, T(3.37) with the sign of T(3.61) / T(3.14):
