@@ -334,7 +334,7 @@ def run_one(spec: RunSpec) -> dict:
         state = setup_case(case, log=lambda m: None)
         row["particles"] = int(state.n)
         row["fluid"] = int(state.n_fluid)
-        report = run_case(case, progress=False, echo=None)
+        report = run_case(case, progress=False, echo=None, threads=spec.threads)
         row["outcome"] = "ok"
     except BlowUp as e:
         report = e.report
