@@ -64,7 +64,8 @@ class StudyDict(Strict):
     pareto: str | None = Field(None, description="metric whose |error| is plotted against cost "
                                "(default: the metricsDict's pareto, else the first metric)")
     jobs: int = Field(1, ge=1, description="runs at once (local processes)")
-    threads: int = Field(1, ge=1, description="numba threads of each run")
+    threads: int = Field(1, ge=1, description=(
+        "numba threads of each run, pinned (the runs' controlDict threads is not used)"))
     scheduler: str | None = Field(None, description="address of a Dask distributed scheduler "
                                   "(tcp://host:8786); the case folders must be on a file "
                                   "system its workers share")

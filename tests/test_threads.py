@@ -100,7 +100,7 @@ def test_more_cores_climb_to_the_fastest_count():
 def test_one_thread_pool_never_probes():
     ctl = AdaptiveThreads(1)
     assert drive(ctl, lambda k, n: 1e-3, 1000) == [1] * 1000
-    assert ctl.probes == 0 and "1000 at 1" in ctl.summary()
+    assert ctl.tries == 0 and "1000 at 1" in ctl.summary()
 
 
 def test_setting_values():

@@ -140,8 +140,8 @@ class ControlDict(Strict):
         "numba threads of the run: `auto` chooses between 1 and numba's pool "
         "(`NUMBA_NUM_THREADS`) from the measured wall time per step, moving to fewer threads "
         "when another process makes them slower and back when it stops (see the user guide, "
-        "*Threads*); a number pins the count (at most the pool's; `sphfoam run -j N` "
-        "overrides it); results do not depend on it"))
+        "*Threads*); a whole number >= 1 pins the count (at most the pool's; `sphfoam run -j` "
+        "overrides either); results do not depend on it"))
     settling: Settling | None = Field(None, description=(
         "{ endTime 0.5; }: settle the set-up particles with every wall still before t = 0 "
         "(T §5.3.4); the layout before settling is kept as 0.unsettled/"))

@@ -31,6 +31,7 @@ fields.
 
 from __future__ import annotations
 
+import os
 from collections import Counter
 from dataclasses import dataclass
 
@@ -94,7 +95,7 @@ class AdaptiveThreads:
         self.current = self.n_max      # the count of the coming step
         self.steps = Counter()         # steps run at each count
         self.changes: list[Change] = []
-        self.probes = 0
+        self.tries = 0
         self._phase = "base"           # base | probe | after
         self._skip = self.warmup
         self._k = 0                    # steps and seconds of the open window
@@ -150,7 +151,7 @@ class AdaptiveThreads:
             self._before = mean
             self._probe_n = self._candidate()
             self._phase = "probe"
-            self.probes += 1
+            self.tries += 1
             return self._set(self._probe_n)
         if self._phase == "probe":
             self._probe_t = mean
@@ -169,9 +170,9 @@ class AdaptiveThreads:
         return None
 
     def summary(self) -> str:
-        """One line: steps at each count, probes and changes."""
+        """One line: steps at each count, tries and changes."""
         per = ", ".join(f"{self.steps[n]} at {n}" for n in sorted(self.steps, reverse=True))
-        return (f"threads auto: steps {per}; {self.probes} probe(s), "
+        return (f"threads auto: steps {per}; {self.tries} probe window(s), "
                 f"{len(self.changes)} change(s); ended at {self.n}")
 
 
@@ -228,6 +229,11 @@ class RunThreads:
                       if int(setting) > pool else "")
             log(f"threads: {n} ({source} {setting}{capped})")
         numba.set_num_threads(n)
+        if (self.adaptive is not None and numba.threading_layer() == "omp"
+                and os.environ.get("OMP_WAIT_POLICY", "").strip().lower() == "active"):
+            log("threads auto: note: OMP_WAIT_POLICY=active keeps an OpenMP thread the run no "
+                "longer uses spinning (for minutes), so fewer threads do not give its core "
+                "back; unset it (libgomp's default spins briefly, then sleeps)")
 
     def after_step(self, seconds: float, time: float) -> None:
         """The wall time of the step just run (ends at simulation ``time``)."""
