@@ -32,6 +32,7 @@ fields.
 from __future__ import annotations
 
 import os
+import sys
 from collections import Counter
 from dataclasses import dataclass
 
@@ -40,7 +41,7 @@ WINDOW_SECONDS = 0.5
 MIN_WINDOW_STEPS = 8
 WARMUP_STEPS = 3
 MARGIN = 0.05
-MAX_GAP = 16
+MAX_GAP = 32
 
 
 @dataclass(frozen=True)
@@ -229,6 +230,7 @@ class RunThreads:
                       if int(setting) > pool else "")
             log(f"threads: {n} ({source} {setting}{capped})")
         numba.set_num_threads(n)
+        log(f"threads: {layer_description()}")
         if (self.adaptive is not None and numba.threading_layer() == "omp"
                 and os.environ.get("OMP_WAIT_POLICY", "").strip().lower() == "active"):
             log("threads auto: note: OMP_WAIT_POLICY=active keeps an OpenMP thread the run no "
@@ -258,3 +260,35 @@ class RunThreads:
         if self.adaptive is not None:
             self._log(self.adaptive.summary())
         self._numba.set_num_threads(self._saved)
+
+
+#: numba's threading layers in the order sphfoam asks for them (see prefer_omp)
+LAYER_PRIORITY = ("omp", "tbb", "workqueue")
+
+
+def prefer_omp() -> None:
+    """Ask numba for its OpenMP layer first (numba's own order puts tbb first), so that a
+    machine that happens to have tbb installed runs the layer these choices were measured
+    with: libgomp with its default wait policy (a waiting thread spins ~300 000 times, then
+    sleeps; benchmarks/README.md). Nothing is changed when ``NUMBA_THREADING_LAYER`` or
+    ``NUMBA_THREADING_LAYER_PRIORITY`` is set, nor once numba has started its threads."""
+    if os.environ.get("NUMBA_THREADING_LAYER") or os.environ.get("NUMBA_THREADING_LAYER_PRIORITY"):
+        return
+    os.environ["NUMBA_THREADING_LAYER_PRIORITY"] = " ".join(LAYER_PRIORITY)
+    if "numba" in sys.modules:
+        sys.modules["numba"].config.THREADING_LAYER_PRIORITY = list(LAYER_PRIORITY)
+
+
+def layer_description() -> str:
+    """numba's threading layer and, for omp, the wait policy in force (for the log)."""
+    import numba
+
+    numba.get_num_threads()           # starts numba's threads (and so its layer) if not yet
+    layer = numba.threading_layer()
+    if layer != "omp":
+        return f"threading layer {layer}"
+    pol = os.environ.get("OMP_WAIT_POLICY")
+    spin = os.environ.get("GOMP_SPINCOUNT")
+    how = (f"OMP_WAIT_POLICY={pol}" if pol else "libgomp's default wait: spin, then sleep")
+    return f"threading layer omp ({how}{f', GOMP_SPINCOUNT={spin}' if spin else ''})"
+
