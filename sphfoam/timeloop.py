@@ -139,7 +139,8 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
     eps = 1e-9 * max(c.writeInterval, 1e-300)
     bar = _Progress(progress, t0, t_end, state.n, console)
     pool = RunThreads(c.threads if threads is None else threads,
-                      "system/controlDict threads" if threads is None else "given to the run:",
+                      f"system/controlDict threads {c.threads}" if threads is None else
+                      f"run option -j/threads={threads}; controlDict threads {c.threads} not used",
                       log)
     clock = wallclock.perf_counter
     wall0 = clock()

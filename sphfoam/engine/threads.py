@@ -200,11 +200,11 @@ class RunThreads:
     """The thread count of one run: pinned, or adaptive (:class:`AdaptiveThreads`).
 
     ``setting`` is controlDict ``threads`` or the caller's override (``sphfoam run -j``,
-    ``sphfoam.run(threads=...)``), ``source`` says which for the log. numba's count before
-    the run is restored by :meth:`end`.
+    ``sphfoam.run(threads=...)``); ``origin`` says where it came from, for the log. numba's
+    count before the run is restored by :meth:`end`.
     """
 
-    def __init__(self, setting, source: str, log, **adaptive):
+    def __init__(self, setting, origin: str, log, **adaptive):
         import numba
 
         self._numba = numba
@@ -215,12 +215,12 @@ class RunThreads:
         if setting == "auto":
             n = pool
             if pool == 1:
-                log(f"threads: 1 ({source} auto; numba's pool has 1 thread: NUMBA_NUM_THREADS=1 "
+                log(f"threads: 1 ({origin}; numba's pool has 1 thread: NUMBA_NUM_THREADS=1 "
                     "or one core)")
             else:
                 self.adaptive = AdaptiveThreads(pool, **adaptive)
                 a = self.adaptive
-                log(f"threads: auto ({source}), 1 to {pool} (numba's pool, NUMBA_NUM_THREADS): "
+                log(f"threads: auto ({origin}), 1 to {pool} (numba's pool, NUMBA_NUM_THREADS): "
                     f"starting at {pool}; windows of >= {a.min_steps} steps and "
                     f"{a.window_seconds:g} s are timed, a neighbouring count is tried now and "
                     f"then and kept when > {100 * a.margin:g} % faster")
@@ -228,7 +228,7 @@ class RunThreads:
             n = min(int(setting), pool)
             capped = (f"; numba's pool has only {pool} (NUMBA_NUM_THREADS)"
                       if int(setting) > pool else "")
-            log(f"threads: {n} ({source} {setting}{capped})")
+            log(f"threads: {n} ({origin}{capped})")
         numba.set_num_threads(n)
         log(f"threads: {layer_description()}")
         if (self.adaptive is not None and numba.threading_layer() == "omp"
@@ -245,9 +245,9 @@ class RunThreads:
         new = a.record(seconds)
         if new is not None:
             self._numba.set_num_threads(new)
-            if a.changes and a.changes[-1].step == a.step_count and len(a.changes) <= LOGGED_CHANGES:
-                self._log(f"time {time:.6g} (step {a.changes[-1].step} of this run): "
-                          f"{a.changes[-1].describe()}"
+            last = a.changes[-1] if a.changes else None
+            if last is not None and last.step == a.step_count and len(a.changes) <= LOGGED_CHANGES:
+                self._log(f"time {time:.6g} (step {last.step} of this run): {last.describe()}"
                           + ("; later changes are counted at the end only"
                              if len(a.changes) == LOGGED_CHANGES else ""))
 
