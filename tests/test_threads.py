@@ -193,3 +193,42 @@ def test_one_two_and_adaptive_threads_give_bit_identical_results(tmp_path):
     for other in (two, auto):
         differ = [k for k in one["fields"] if one["fields"][k] != other["fields"][k]]
         assert not differ, f"fields differing from the 1-thread run: {differ}"
+
+
+def test_pinned_count_beyond_the_pool_is_capped_and_said(tutorial):
+    import numba
+
+    from sphfoam.engine.threads import RunThreads, pool_size
+
+    before = numba.get_num_threads()
+    lines: list[str] = []
+    rt = RunThreads(64, "system/controlDict threads 64", lines.append)
+    assert numba.get_num_threads() == pool_size() and rt.adaptive is None
+    assert lines[0] == (f"threads: {pool_size()} (system/controlDict threads 64; numba's pool "
+                        f"has only {pool_size()} (NUMBA_NUM_THREADS))")
+    assert lines[1].startswith("threads: threading layer ")
+    rt.end()
+    assert numba.get_num_threads() == before
+
+
+def test_threads_option_auto_and_numbers():
+    from sphfoam.cli import _threads
+
+    assert _threads(None) is None and _threads("auto") == "auto" and _threads("3") == 3
+
+
+@pytest.mark.parametrize("env, expected", [({}, "omp tbb workqueue"),
+                                           ({"NUMBA_THREADING_LAYER": "workqueue"}, None),
+                                           ({"NUMBA_THREADING_LAYER_PRIORITY":
+                                             "workqueue omp tbb"}, "workqueue omp tbb")])
+def test_import_asks_for_omp_first_unless_the_user_chose(env, expected):
+    base = {k: v for k, v in os.environ.items()
+            if k not in ("NUMBA_THREADING_LAYER", "NUMBA_THREADING_LAYER_PRIORITY")}
+    code = ("import os, sphfoam, numba; print(os.environ.get('NUMBA_THREADING_LAYER_PRIORITY'), "
+            "' '.join(numba.config.THREADING_LAYER_PRIORITY), sep='|')")
+    cp = subprocess.run([sys.executable, "-c", code], env={**base, **env, "PYTHONPATH": str(REPO)},
+                        capture_output=True, text=True, timeout=120)
+    assert cp.returncode == 0, cp.stderr
+    got_env, _, got_cfg = cp.stdout.strip().partition("|")
+    assert got_env == str(expected)
+    assert got_cfg == (expected or "tbb omp workqueue")
