@@ -58,16 +58,18 @@ def setup_case(case: "Case | str | Path") -> "Case":
 
 
 def run(case: "Case | str | Path", *, end_time: float | None = None, progress: bool = False,
-        echo=None) -> "RunReport":
+        echo=None, threads: "int | str | None" = None) -> "RunReport":
     """``sphfoam run``: run the case (setting it up first if ``0/`` holds no particles).
 
-    ``end_time`` overrides ``controlDict.endTime``; ``echo`` (e.g. ``print``) receives the
+    ``end_time`` overrides ``controlDict.endTime``; ``threads`` (a number >= 1 or
+    ``"auto"``) overrides controlDict ``threads``; ``echo`` (e.g. ``print``) receives the
     log lines, which always go to ``log.sphfoam``. Returns the run's report (steps,
     particles, timings, written times, and ``failure`` if the blow-up detector stopped it).
     """
     from sphfoam.timeloop import run_case
 
-    return run_case(_case(case), progress=progress, echo=echo, end_time=end_time)
+    return run_case(_case(case), progress=progress, echo=echo, end_time=end_time,
+                    threads=threads)
 
 
 def times(case: "Case | str | Path") -> list[float]:

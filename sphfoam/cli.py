@@ -142,11 +142,20 @@ def _case(path: Path):
     return Case(path)
 
 
-def _threads(n: Optional[int]):
-    if n:
-        import numba
-
-        numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
+def _threads(value: Optional[str]):
+    """``-j N`` or ``-j auto``: overrides controlDict ``threads`` (None: use controlDict's)."""
+    if value is None:
+        return None
+    if value.strip() == "auto":
+        return "auto"
+    try:
+        n = int(value)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise typer.BadParameter(f"{value!r}: expected auto or a whole number of threads >= 1",
+                                 param_hint="'-j' / '--threads'")
+    return n
 
 
 def _version(value: bool):
@@ -165,7 +174,9 @@ def main_callback(debug: bool = typer.Option(False, "--debug", help="show traceb
 @app.command()
 @_guarded
 def run(case: Path = typer.Argument(Path("."), help="case directory"),
-        threads: Optional[int] = typer.Option(None, "--threads", "-j", help="numba threads"),
+        threads: Optional[str] = typer.Option(
+            None, "--threads", "-j", metavar="N|auto", callback=_threads,
+            help="numba threads, or auto (overrides controlDict threads)"),
         end_time: Optional[float] = typer.Option(None, "--end-time",
                                                  help="stop here instead of endTime"),
         no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar")):
@@ -173,11 +184,10 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
     from sphfoam.engine.health import BlowUp
     from sphfoam.timeloop import run_case
 
-    _threads(threads)
     c = _case(case)
     try:
         rep = run_case(c, progress=not no_progress and console.is_terminal, echo=_echo,
-                       end_time=end_time, console=console)
+                       end_time=end_time, console=console, threads=threads)
     except BlowUp as e:
         if _state["debug"]:
             raise

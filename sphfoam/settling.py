@@ -23,9 +23,12 @@ run stops with a case error naming ``settling``).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.engine.threads import RunThreads
 from sphfoam.io.timedirs import UNSETTLED, case_lock, write_time
 
 
@@ -93,25 +96,33 @@ def settle(case, state: ParticleState, log=print) -> tuple[ParticleState, int, f
     steps = 0
     eps = 1e-9 * t_end
     tenth = 1                            # a log line every tenth of the settling time
-    while sim.time < t_end - eps:
-        remaining = t_end - sim.time
-        dt = sim.step(remaining)
-        landed = dt >= remaining * (1 - 1e-12)
-        if landed:
-            sim.time = t_end
-        steps += 1
-        if sim.time >= tenth * t_end / 10 - eps or sim.time >= t_end - eps:
-            log(f"settling: time {sim.time:.6g} of {t_end:g} s (step {steps}, dt {dt:.4g}, "
-                f"KE {sim.kinetic_energy():.4g} J/m)")
-            while tenth * t_end / 10 - eps <= sim.time:
-                tenth += 1
-        diagnosis = monitor.check(sim, dt, landed)
-        if diagnosis is not None:
-            raise CaseError.single(
-                "system/controlDict", "settling.endTime",
-                f"the settling run diverged at time {diagnosis.fail_time:.6g} s (step "
-                f"{diagnosis.step}): {diagnosis.title}. Check the set-up in "
-                f"{case.path / UNSETTLED} (sphfoam export vtk) or settle for less")
+    pool = RunThreads(case.control.threads,
+                      f"settling; system/controlDict threads {case.control.threads}", log)
+    clock = time.perf_counter
+    try:
+        while sim.time < t_end - eps:
+            remaining = t_end - sim.time
+            t_step = clock()
+            dt = sim.step(remaining)
+            pool.after_step(clock() - t_step, sim.time)
+            landed = dt >= remaining * (1 - 1e-12)
+            if landed:
+                sim.time = t_end
+            steps += 1
+            if sim.time >= tenth * t_end / 10 - eps or sim.time >= t_end - eps:
+                log(f"settling: time {sim.time:.6g} of {t_end:g} s (step {steps}, dt {dt:.4g}, "
+                    f"KE {sim.kinetic_energy():.4g} J/m)")
+                while tenth * t_end / 10 - eps <= sim.time:
+                    tenth += 1
+            diagnosis = monitor.check(sim, dt, landed)
+            if diagnosis is not None:
+                raise CaseError.single(
+                    "system/controlDict", "settling.endTime",
+                    f"the settling run diverged at time {diagnosis.fail_time:.6g} s (step "
+                    f"{diagnosis.step}): {diagnosis.title}. Check the set-up in "
+                    f"{case.path / UNSETTLED} (sphfoam export vtk) or settle for less")
+    finally:
+        pool.end()
     st = sim.state
     fluid = st.kind == FLUID
     st.u[fluid] = 0.0

@@ -64,7 +64,8 @@ class StudyDict(Strict):
     pareto: str | None = Field(None, description="metric whose |error| is plotted against cost "
                                "(default: the metricsDict's pareto, else the first metric)")
     jobs: int = Field(1, ge=1, description="runs at once (local processes)")
-    threads: int = Field(1, ge=1, description="numba threads of each run")
+    threads: int = Field(1, ge=1, description=(
+        "numba threads of each run, pinned (the runs' controlDict threads is not used)"))
     scheduler: str | None = Field(None, description="address of a Dask distributed scheduler "
                                   "(tcp://host:8786); the case folders must be on a file "
                                   "system its workers share")
@@ -334,7 +335,7 @@ def run_one(spec: RunSpec) -> dict:
         state = setup_case(case, log=lambda m: None)
         row["particles"] = int(state.n)
         row["fluid"] = int(state.n_fluid)
-        report = run_case(case, progress=False, echo=None)
+        report = run_case(case, progress=False, echo=None, threads=spec.threads)
         row["outcome"] = "ok"
     except BlowUp as e:
         report = e.report

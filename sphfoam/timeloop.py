@@ -20,6 +20,7 @@ from sphfoam.case.times import time_name
 from sphfoam.engine.health import BlowUp, Diagnosis, HealthMonitor
 from sphfoam.engine.schedule import Schedule
 from sphfoam.engine.state import GHOST, ParticleState
+from sphfoam.engine.threads import RunThreads, check_setting
 from sphfoam.io.fields import has_particles, read_state
 from sphfoam.io.timedirs import (case_lock, read_time_value, recover, start_folder,
                                  write_time)
@@ -63,10 +64,14 @@ class RunReport:
 
 
 def run_case(case: Case | str | Path, *, progress: bool = True, echo=print,
-             end_time: float | None = None, console=None) -> RunReport:
+             end_time: float | None = None, console=None,
+             threads: int | str | None = None) -> RunReport:
     """Run a case from its start time to endTime (or ``end_time``). ``console``: the rich
     console the progress bar draws on; give ``echo`` that prints on the same console so
-    log lines appear above the bar instead of being glued to it."""
+    log lines appear above the bar instead of being glued to it. ``threads`` (``"auto"`` or
+    a number >= 1) overrides controlDict ``threads`` (see :mod:`sphfoam.engine.threads`)."""
+    if threads is not None:
+        check_setting(threads, "threads")
     case = case if isinstance(case, Case) else Case(case)
     case.validate()
     c = case.control
@@ -74,7 +79,7 @@ def run_case(case: Case | str | Path, *, progress: bool = True, echo=print,
         log = Log(case.path / "log.sphfoam", echo)
         try:
             return _run(case, c, log, progress,
-                        end_time if end_time is not None else c.endTime, console)
+                        end_time if end_time is not None else c.endTime, console, threads)
         finally:
             log.close()
 
@@ -89,7 +94,7 @@ class Interrupted(KeyboardInterrupt):
         self.written, self.latest = written, latest
 
 
-def _run(case, c, log, progress, t_end, console=None) -> RunReport:
+def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport:
     log(f"sphfoam {__version__}: case {case.path}")
     recover(case.path, log)
     folder = start_folder(case, log)
@@ -133,7 +138,12 @@ def _run(case, c, log, progress, t_end, console=None) -> RunReport:
     progress_due = Schedule("everyStep")   # the bar itself redraws at most every 0.2 s
     eps = 1e-9 * max(c.writeInterval, 1e-300)
     bar = _Progress(progress, t0, t_end, state.n, console)
-    wall0 = wallclock.perf_counter()
+    pool = RunThreads(c.threads if threads is None else threads,
+                      f"system/controlDict threads {c.threads}" if threads is None else
+                      f"run option -j/threads={threads}; controlDict threads {c.threads} not used",
+                      log)
+    clock = wallclock.perf_counter
+    wall0 = clock()
     stop = _StopRequest()
     try:
         while sim.time < t_end - eps:
@@ -143,7 +153,9 @@ def _run(case, c, log, progress, t_end, console=None) -> RunReport:
             target = min(writes.next_time(sim.time), t_end) if lands else t_end
             remaining = target - sim.time
             t_prev = sim.time
+            t_step = clock()
             dt = sim.step(remaining)
+            pool.after_step(clock() - t_step, sim.time)
             landed = dt >= remaining * (1 - 1e-12)
             if landed:
                 sim.time = target          # land exactly, so restarts see the same time
@@ -188,6 +200,7 @@ def _run(case, c, log, progress, t_end, console=None) -> RunReport:
     finally:
         stop.restore()
         bar.close()
+        pool.end()
         report.run_seconds = wallclock.perf_counter() - wall0
         report.end_time = sim.time if report.failure is None else report.failure.time
         report.particles = int(np.count_nonzero(sim.state.kind != GHOST))

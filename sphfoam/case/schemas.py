@@ -8,7 +8,7 @@ lists; OpenFOAM switches (yes/no/on/off/true/false) become bools, dimensioned sc
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
 from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, field_validator,
                       model_validator)
@@ -105,6 +105,18 @@ class Settling(Strict):
         "give its settling time)"))
 
 
+def _threads(v: Any) -> Any:
+    """``auto`` or a whole number >= 1 (a switch word such as ``yes`` is neither)."""
+    if isinstance(v, str) and v == "auto":
+        return v
+    if isinstance(v, int) and not isinstance(v, bool) and v >= 1:
+        return v
+    raise ValueError(f"expected auto or a whole number of threads >= 1, got {v!r}")
+
+
+Threads = Annotated[Union[Literal["auto"], int], BeforeValidator(_threads)]
+
+
 class ControlDict(Strict):
     application: str = "sphfoam"
     startFrom: Literal["startTime", "latestTime"] = "latestTime"
@@ -124,6 +136,12 @@ class ControlDict(Strict):
     writePrecision: int = Field(6, ge=1, le=17)
     timePrecision: int = Field(6, ge=1, le=17)
     functions: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    threads: Threads = Field("auto", description=(
+        "numba threads of the run: `auto` chooses between 1 and numba's pool "
+        "(`NUMBA_NUM_THREADS`) from the measured wall time per step, moving to fewer threads "
+        "when another process makes them slower and back when it stops (see the user guide, "
+        "*Threads*); a whole number >= 1 pins the count (at most the pool's; `sphfoam run -j` "
+        "overrides either); results do not depend on it"))
     settling: Settling | None = Field(None, description=(
         "{ endTime 0.5; }: settle the set-up particles with every wall still before t = 0 "
         "(T §5.3.4); the layout before settling is kept as 0.unsettled/"))
