@@ -141,8 +141,7 @@ ca = c[a]
 #: closing to r -> 0 (a particle meeting its own mirror image at a wall) collapses the step
 _SIGMA = """\
 s_ab = abs(h * vdotr / (r2 + eta2))
-if s_ab > sigma_a:
-    sigma_a = s_ab
+sigma_a = max(sigma_a, s_ab)
 """
 
 #: the 3 x 3 cell walk around particle ``a``, run once per step to build the neighbour list
@@ -192,12 +191,16 @@ for k in range(half[a], nb_start[a + 1]):
 
 #: T(3.89) in the half-list loop: s_ab is the same for (a, b) and (b, a); fluid particles only
 _SIGMA_HALF = """\
-if kinda == FLUID or kindb == FLUID:
-    s_ab = abs(h * vdotr / (r2 + eta2))
-    if kinda == FLUID and s_ab > sigma_a:
-        sigma_a = s_ab
-    if kindb == FLUID and s_ab > out_sigma[b]:
-        out_sigma[b] = s_ab"""
+s_ab = abs(h * vdotr / (r2 + eta2))
+if kinda == FLUID:
+    sigma_a = max(sigma_a, s_ab)
+if kindb == FLUID:
+    out_sigma[b] = max(out_sigma[b], s_ab)"""
+#: the same for a fluid pair
+_SIGMA_FF = """\
+s_ab = abs(h * vdotr / (r2 + eta2))
+sigma_a = max(sigma_a, s_ab)
+out_sigma[b] = max(out_sigma[b], s_ab)"""
 
 
 class Assembly:
@@ -592,17 +595,37 @@ class Assembly:
                     code += "\nelse:\n" + _indent(wet_code)
                 side.append(code)
         side_a, side_b = "\n".join(x for x in side_a if x), "\n".join(x for x in side_b if x)
-        body = [_NEIGHBOUR_LOAD + "\n".join(pre_code),
-                "acc_b_x = 0.0\nacc_b_y = 0.0\ndrho_b = 0.0", side_a or "pass",
-                side_b or "pass"]
+        pair_code = (side_a or "pass") + "\n" + (side_b or "pass")
         if sigma:
-            body.append(_SIGMA_HALF)
+            pair_code += "\n" + _SIGMA_HALF
+        ff = self._fluid_fluid(common, own, sigma)
+        if ff is not None:
+            # the common case, a fluid pair, in straight-line code of its own: the same terms
+            # in the same order (the same sums), with no branch on the kinds between a's
+            # terms and b's reactions, so the compiler shares what they have in common
+            # (rho_a rho_b, Pi_ab, the reciprocals)
+            pair_code = ("if kinda == FLUID and kindb == FLUID:\n" + _indent(ff)
+                         + "\nelse:\n" + _indent(pair_code))
+        body = [_NEIGHBOUR_LOAD + "\n".join(pre_code),
+                "acc_b_x = 0.0\nacc_b_y = 0.0\ndrho_b = 0.0", pair_code]
         if stage == "rates":
             body.append("out_ax[b] += acc_b_x\nout_ay[b] += acc_b_y")
         body.append("out_drho[b] += drho_b")
         loop = _HALF.format(body=_block("\n".join(body), 4))
         init = self.particle_code(terms, "init")
         return "\n".join(x for x in (init, loop) if x)
+
+    def _fluid_fluid(self, common: list, own: list, sigma: bool) -> str | None:
+        """The half-list pair code of a fluid particle a and a fluid neighbour b: a's terms
+        that see fluid, then b's reactions, in the order of the general branches."""
+        ts = [t for t in common + own if {"fluid", "all"} & self.sees(t)]
+        if not ts:
+            return None
+        code = [expand_components(t.pair) for t in ts if t.pair]
+        code += [expand_components(t.reaction) for t in ts if t.reaction]
+        if sigma:
+            code.append(_SIGMA_FF)
+        return "\n".join(code)
 
 
 def expand_components(code: str) -> str:

@@ -58,13 +58,15 @@ class Artificial(Viscosity):
     def params(self, ctx):
         return {"visc_alpha": self.coeffs.alpha}
 
-    pair_code = ("if vdotr < 0.0:\n"
-                 "    pi_ab = -visc_alpha * h * (ca + cb) / (rhoa + rhob) * vdotr / (r2 + eta2)\n"
-                 "    acc_@ -= mb * pi_ab * gW@")
-    # Pi_ba = Pi_ab (v_ba . r_ba = v_ab . r_ab), grad_b W_ba = -grad_a W_ab
-    reaction_code = ("if vdotr < 0.0:\n"
-                     "    pi_ba = -visc_alpha * h * (cb + ca) / (rhob + rhoa) * vdotr / (r2 + eta2)\n"
-                     "    acc_b_@ += ma * pi_ba * gW@")
+    # min(vdotr, 0) instead of a branch: receding pairs add an exact 0.0 (the same sums),
+    # and the loop has no data-dependent branch to mispredict (about half the pairs of a
+    # flow with pressure waves approach)
+    pair_code = ("pi_ab = -visc_alpha * h * (ca + cb) / (rhoa + rhob) * min(vdotr, 0.0) / (r2 + eta2)\n"
+                 "acc_@ -= mb * pi_ab * gW@")
+    # Pi_ba = Pi_ab (v_ba . r_ba = v_ab . r_ab), grad_b W_ba = -grad_a W_ab; written as Pi_ab
+    # is, so that the compiler computes it once for both particles
+    reaction_code = ("pi_ba = -visc_alpha * h * (ca + cb) / (rhoa + rhob) * min(vdotr, 0.0) / (r2 + eta2)\n"
+                     "acc_b_@ += ma * pi_ba * gW@")
 
 
 @register
