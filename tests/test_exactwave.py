@@ -44,6 +44,20 @@ def test_celerity_matches_the_third_order_series_to_fourth_order(eps):
         assert abs(F - grimshaw_F(0.1)) / abs(small - grimshaw_F(0.05)) > 12.0
 
 
+def test_celerity_stays_below_the_published_fastest_solitary_wave():
+    """No solitary wave is faster than F = c/sqrt(g d) = 1.294: "the numerical evidence of
+    Longuet-Higgins & Fenton (1974) states Fr <= 1.294" (Lokharu & Weber 2025, "An improved
+    upper bound for the Froude number of irrotational solitary water waves",
+    arXiv:2502.18181, abstract).  That is the only published celerity value reachable here (no
+    table of F against A/d, by Tanaka 1986 or anyone, could be found), so this is a bound, not
+    a match at given heights.  The figure has three decimals, so the test allows up to 1.2945.
+    It bites at the top of the solved range, A/d = 0.78, where F = 1.29331 (1.29352 with 4096
+    modes), 1e-3 under the bound; A/d = 0.1 and 0.5 are shared with the other tests."""
+    F = {eps: wave("euler", eps).c / math.sqrt(G) for eps in (0.1, 0.5, eulerwave.MAX_EPS)}
+    assert all(1.0 < f < 1.2945 for f in F.values())
+    assert F[0.1] < F[0.5] < F[eulerwave.MAX_EPS]
+
+
 @pytest.mark.parametrize("eps", [0.01, 0.03])
 def test_profile_agrees_with_second_order_theories_for_small_waves(eps):
     """eta and u of kdv2 differ from the exact wave by O(eps^3) d: < 2 eps^3 d."""
