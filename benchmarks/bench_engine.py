@@ -517,7 +517,9 @@ def stage_breakdown(sim, seconds, min_steps=5):
     return dict(steps=nsteps, ms_per_step=1e3 * total / nsteps, stages=out)
 
 
-def bench_config(total, threads, args):
+def bench_config(total, threads, args, steps=None):
+    """One size at one thread count; ``steps``: time exactly that many steps (the first
+    thread count's window, so that every thread count times the same stretch of the flow)."""
     import numba
     import numpy as np
 
@@ -530,7 +532,8 @@ def bench_config(total, threads, args):
         sim.step()
     ns0 = neighbour_stats(sim, check_kdtree=(threads == args.threads[0]))
     c0, w0 = time.process_time(), time.perf_counter()
-    times = timed_steps(sim, args.seconds)
+    times = (timed_steps(sim, 0.0, min_steps=steps) if steps
+             else timed_steps(sim, args.seconds))
     cpu_util = (time.process_time() - c0) / ((time.perf_counter() - w0) * threads)
     ns1 = neighbour_stats(sim)
     steps = len(times)
@@ -745,7 +748,9 @@ def write_markdown(results, path: Path):
               "monaghan2007); pair interactions = ordered pairs a != b within the support "
               "x force evaluations (the density_rate pass, a third pair loop per step, "
               "is not counted; see JSON `pair_loop_visits_per_s`). speedup = vs the first "
-              "thread count. best ms/step = the fastest ~0.5 s run of consecutive steps "
+              "thread count, over the same steps (each thread count times as many steps "
+              "as the first did in its window, so all time the same stretch of the flow). "
+              "best ms/step = the fastest ~0.5 s run of consecutive steps "
               "(less sensitive to other processes; every rate uses the whole window). "
               "drift = median step time of the last quarter of the window / of the first "
               "quarter (the pair loops get dearer as the flow develops). launch = median wall time of an empty numba prange region at "
@@ -895,9 +900,11 @@ def main(argv=None):
         args.threads = threads
         for total in args.sizes:
             base = None
+            first_steps = None
             for thr in threads:
                 print(f"run: N ~ {total:,}, {thr} thread(s) ...", flush=True)
-                r = bench_config(total, thr, args)
+                r = bench_config(total, thr, args, first_steps)
+                first_steps = first_steps or r["steps"]
                 base = base or r["ms_per_step"]      # speedup vs the first thread count
                 r["speedup"] = base / r["ms_per_step"]
                 ck = r["neighbours_start"].get("pairs_kdtree")

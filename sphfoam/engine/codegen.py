@@ -162,6 +162,25 @@ for cy0 in range({ylo}, {yhi}):
 {body}
 """
 
+#: the same walk where the x axis is not periodic: the three cells of a row are consecutive,
+#: so their particles are one range of the sorted arrays (the same candidates in the same
+#: order); ``ok`` says whether b is listed, with no branch to mispredict (about 1/3 of the
+#: candidates in the 3 x 3 cells are within the cell side)
+_CELLS_ROWS = """\
+ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)
+iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)
+cx_lo = max(ix - 1, 0)
+cx_hi = min(ix + 2, ncx)
+for cy0 in range({ylo}, {yhi}):
+    row = {cy} * ncx
+    for b in range(cell_start[row + cx_lo], cell_start[row + cx_hi]):
+        dx_ab = xa - x[b]
+        dy_ab = ya - y[b]
+{wrap}        r2 = dx_ab * dx_ab + dy_ab * dy_ab
+        ok = (r2 < reach2) & (b != a)
+{body}
+"""
+
 #: every pair loop: over the neighbour list of particle ``a`` (built once per step)
 _LIST = """\
 for k in range(nb_start[a], nb_start[a + 1]):
@@ -427,9 +446,18 @@ class Assembly:
                      "    dy_ab += ly\n")
         return wrap
 
-    def cell_walk(self, body: str) -> str:
-        """The 3 x 3 cell gather around particle ``a`` (within ``reach2``), for the list."""
+    def cell_walk(self, body: str, rows: str | None = None) -> str:
+        """The 3 x 3 cell gather around particle ``a`` (within ``reach2``), for the list:
+        ``body`` for each b within reach, or, where x is not periodic, ``rows`` for every
+        candidate of the three row ranges, with ``ok`` true for those within reach."""
         sel = self.sel
+        if rows is not None and not sel.periodic_x:
+            ylo, yhi, cy = (("iy - 1", "iy + 2", "(cy0 % ncy)") if sel.periodic_y
+                            else ("max(iy - 1, 0)", "min(iy + 2, ncy)", "cy0"))
+            wrap = self._wrap()
+            return _CELLS_ROWS.format(ylo=ylo, yhi=yhi, cy=cy,
+                                      wrap=_block(wrap, 8) + ("\n" if wrap else ""),
+                                      body=_block(rows, 8))
 
         def axis(per, i, n, name):
             if per:
@@ -689,7 +717,7 @@ def count_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, 
         xa = x[a]
         ya = y[a]
         n_a = 0
-{_block(asm.cell_walk("n_a += 1"), 8)}
+{_block(asm.cell_walk("n_a += 1", "n_a += ok"), 8)}
         count[a] = n_a
 
 
@@ -704,7 +732,8 @@ def fill_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, n
         ya = y[a]
         k = nb_start[a]
         k_end = nb_start[a + 1]
-{_block(asm.cell_walk("if k < k_end:" + chr(10) + "    nb_idx[k] = b" + chr(10) + "    k += 1"), 8)}
+{_block(asm.cell_walk("if k < k_end:" + chr(10) + "    nb_idx[k] = b" + chr(10) + "    k += 1",
+                     "if k < k_end:" + chr(10) + "    nb_idx[k] = b" + chr(10) + "k += ok"), 8)}
         while k < k_end:            # (never: the count pass walked the same cells)
             nb_idx[k] = a
             k += 1
