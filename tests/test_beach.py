@@ -317,3 +317,64 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
     assert vals["runUp"].value == pytest.approx(shore[i, 1])
     assert vals["breakingTime"].value == pytest.approx(k["toeToBreaking"])
     assert 0 < vals["toeHeight"].value < 0.07
+
+
+def test_connected_shoreline_leaves_out_particles_apart_from_the_water(tmp_path):
+    """`shoreline connected`: the shoreline is the top of the layer in contact whose particles
+    each lie within the kernel's support of the one below; particles further up the beach
+    beyond a larger gap (they feel no pressure from the water and slide on by themselves, as
+    at d/dx = 20 in the tutorial) do not count. `onBeach` counts them."""
+    from sphfoam.sampling.waves import beach_shoreline
+
+    case, ctx = fake_case(tmp_path)
+    a = math.radians(5.0)
+    support = WendlandC2().support * ctx.h                     # 2 x 1.3 dx = 2.6 dx
+    s = np.arange(0.0, 3.0, DX)                                 # the layer, up to s = 2.98 m
+    s_free = np.array([s[-1] + 1.5 * support, s[-1] + 4.0 * support])  # apart from it
+    for along, top in ((s, s[-1]), (np.append(s, s_free), s[-1])):
+        px = 5.0 + along * math.cos(a) - (DX / 2) * math.sin(a)
+        py = along * math.sin(a) + (DX / 2) * math.cos(a)
+        r, xs = beach_shoreline(px, py, (5, 0), 5, DX, on_beach=True, gap=support)
+        assert r == pytest.approx((top + DX / 2) * math.sin(a), abs=1e-9)
+        assert xs == pytest.approx(5.0 + (top + DX / 2) * math.cos(a), abs=1e-9)
+    r_on = beach_shoreline(px, py, (5, 0), 5, DX, on_beach=True)[0]
+    assert r_on == pytest.approx((s_free[-1] + DX / 2) * math.sin(a), abs=1e-9)
+    # a gap within the support keeps the layer connected
+    near = np.append(s, s[-1] + 0.9 * support)
+    r = beach_shoreline(5.0 + near * math.cos(a) - (DX / 2) * math.sin(a),
+                        near * math.sin(a) + (DX / 2) * math.cos(a), (5, 0), 5, DX,
+                        on_beach=True, gap=support)[0]
+    assert r == pytest.approx((near[-1] + DX / 2) * math.sin(a), abs=1e-9)
+
+    ru = build("type runUp; mode beach; start (5 0); angle 5; shoreline connected;",
+               name="shore")
+    ru.start(case, ctx, "0")
+    ru.execute(FakeSim(px, py, time=0.0))
+    ru.end()
+    data = np.loadtxt(tmp_path / "postProcessing/shore/0/shore.dat", ndmin=2)
+    assert data[0, 1] == pytest.approx((s[-1] + DX / 2) * math.sin(a), abs=1e-9)
+    with pytest.raises(Exception, match="mode beach only"):
+        build("type runUp; mode wall; x 1; shoreline connected;")
+
+
+def test_breaking_point_needs_the_criterion_to_persist(tmp_path):
+    """A crest that stalls over the toe for a moment (its fitted celerity collapsing, so
+    u/c passes 1 for 0.01-0.03 s, as the tutorial's d/dx = 10 run did 0.25 s past the toe)
+    is not the breaking point: a criterion must hold for `persist` (0.05 s by default); the
+    breaking point is then the first sample of the run of samples that held."""
+    case, ctx = fake_case(tmp_path)
+    c = 2.0
+    for name, persist, want in (("held", 0.05, 0.6), ("first", 0.0, 0.2)):
+        fo = build(f"type breakingPoint; xMin 1; xMax 7.5; still 0.5; toe 1.5; "
+                   f"celerityWindow 0.1; minHeight 0.05; persist {persist};", name=name)
+        fo.start(case, ctx, "0")
+        for k in range(16):                  # every 0.05 s; u = 1.5 c at 0.2 s (a blip)
+            t = 0.05 * k                     # and from 0.6 s on (it breaks for good)
+            x, y = wave(2.0 + c * t, 0.15, 30)
+            fast = k == 4 or k >= 12
+            fo.execute(FakeSim(x, y, np.where(y > D + 0.12, (1.5 if fast else 0.5) * c, 0.0),
+                               time=t))
+        fo.end()
+        rows = beach.read_breaking(tmp_path / f"postProcessing/{name}/0/summary.dat")
+        assert rows["kinematic"]["time"] == pytest.approx(want), name
+        assert math.isnan(rows["geometric"]["time"])

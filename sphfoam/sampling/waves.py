@@ -507,14 +507,20 @@ def wall_run_up(xf, yf, wall_x, dx, *, still=0.0, band=1.5) -> float:
 
 
 def beach_shoreline(xf, yf, start, angle, dx, *, length=math.inf, still=0.0, band=1.5,
-                    on_beach: bool = False) -> tuple[float, float]:
+                    on_beach: bool = False, gap: float = math.inf) -> tuple[float, float]:
     """(R, x) of the shoreline on a plane beach rising from ``start`` at ``angle`` degrees,
     from the fluid particles within ``band`` dx of the slope line (along it,
     0 <= s <= length); NaN, NaN with no fluid in contact. Default: R is the highest of them
     + dx/2, above ``still``, and x its x. ``on_beach``: the point of the beach line
     s_max + dx/2 along it, s_max the furthest particle up the beach (the leading edge of its
     cell): R its height above ``still`` and x its x, free of the particles' height above
-    the slope (up to band dx), which the default adds to a thin run-up tongue."""
+    the slope (up to band dx), which the default adds to a thin run-up tongue.
+
+    ``gap`` (a length; with ``on_beach``): s_max is instead the furthest particle of the
+    connected layer: the contact particles in order up the beach, up to the first that is
+    more than ``gap`` beyond the one below it. Particles that have come apart from the
+    water behind them by more than the kernel's support (the ``connected`` shoreline) feel
+    no pressure from it and slide up a frictionless beach on their own."""
     a = math.radians(angle)
     xf, yf = np.asarray(xf), np.asarray(yf)
     rx, ry = xf - start[0], yf - start[1]
@@ -524,7 +530,9 @@ def beach_shoreline(xf, yf, start, angle, dx, *, length=math.inf, still=0.0, ban
     if not near.size:
         return float("nan"), float("nan")
     if on_beach:
-        top = min(float(s[near].max()) + 0.5 * dx, length)
+        along = np.sort(s[near])
+        cut = np.flatnonzero(np.diff(along) > gap)
+        top = min(float(along[cut[0]] if cut.size else along[-1]) + 0.5 * dx, length)
         return (start[1] + top * math.sin(a) - still, start[0] + top * math.cos(a))
     i = near[np.argmax(yf[near])]
     return float(yf[i]) + 0.5 * dx - still, float(xf[i])
@@ -567,12 +575,16 @@ class RunUp(FunctionObject):
         still: float = Field(0.0, description="still-water level (m) run-up is measured from")
         band: float = Field(1.5, gt=0, description=(
             "contact distance from the wall or beach line, in dx"))
-        shoreline: Literal["highestParticle", "onBeach"] = Field(
+        shoreline: Literal["highestParticle", "onBeach", "connected"] = Field(
             "highestParticle", description=(
                 "mode beach: `highestParticle`: the highest fluid particle in contact + dx/2; "
                 "`onBeach`: the point of the beach line dx/2 beyond the furthest particle "
                 "in contact (a thin tongue's particles sit up to `band` dx above the beach, "
-                "which `highestParticle` adds to the run-up)"))
+                "which `highestParticle` adds to the run-up); `connected`: as `onBeach`, "
+                "from the furthest particle of the layer in contact that is connected to "
+                "the water body, each particle within the kernel's support of the one below "
+                "it (a particle further apart feels no pressure from the water and slides on "
+                "by itself)"))
         surface: SurfaceMode = Field("particle", description=(
             "`particle`: the highest fluid particle in contact + dx/2; `fraction` (mode wall "
             "only): the highest point of the wall where the SPH fluid fraction, the fluid "
@@ -599,6 +611,12 @@ class RunUp(FunctionObject):
         self.max = float("nan")
         self.x_max = float("nan")
 
+    def _gap(self) -> float:
+        """The largest gap of the ``connected`` shoreline: the kernel's support."""
+        if self.coeffs.shoreline != "connected":
+            return math.inf
+        return self.case.models.sph["kernel"].support * self.ctx.h
+
     def measure(self, xf, yf, vf=None) -> float:
         c, dx = self.coeffs, self.ctx.dx
         if c.surface == "fraction":
@@ -606,8 +624,9 @@ class RunUp(FunctionObject):
                                         self.ctx.h, dx, still=c.still)
         if c.mode == "wall":
             return wall_run_up(xf, yf, c.x, dx, still=c.still, band=c.band)
-        return beach_run_up(xf, yf, c.start, c.angle, dx, length=c.length, still=c.still,
-                            band=c.band)
+        return beach_shoreline(xf, yf, c.start, c.angle, dx, length=c.length, still=c.still,
+                               band=c.band, on_beach=c.shoreline in ("onBeach", "connected"),
+                               gap=self._gap())[0]
 
     def execute(self, sim):
         st, f = _fluid(sim)
@@ -615,7 +634,8 @@ class RunUp(FunctionObject):
         if c.mode == "beach":
             r, xs = beach_shoreline(st.x[f], st.y[f], c.start, c.angle, self.ctx.dx,
                                     length=c.length, still=c.still, band=c.band,
-                                    on_beach=c.shoreline == "onBeach")
+                                    on_beach=c.shoreline in ("onBeach", "connected"),
+                                    gap=self._gap())
             if r > self.max or not math.isfinite(self.max):
                 self.x_max = xs if math.isfinite(r) else self.x_max
             self.max = float(np.fmax(self.max, r))
