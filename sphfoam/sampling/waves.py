@@ -624,18 +624,21 @@ class RunUp(FunctionObject):
                                         self.ctx.h, dx, still=c.still)
         if c.mode == "wall":
             return wall_run_up(xf, yf, c.x, dx, still=c.still, band=c.band)
-        return beach_shoreline(xf, yf, c.start, c.angle, dx, length=c.length, still=c.still,
-                               band=c.band, on_beach=c.shoreline in ("onBeach", "connected"),
-                               gap=self._gap())[0]
+        return self.shoreline(xf, yf)[0]
+
+    def shoreline(self, xf, yf) -> tuple[float, float]:
+        """(R, x) of the shoreline of mode beach, as ``shoreline`` reads it."""
+        c = self.coeffs
+        return beach_shoreline(xf, yf, c.start, c.angle, self.ctx.dx, length=c.length,
+                               still=c.still, band=c.band,
+                               on_beach=c.shoreline in ("onBeach", "connected"),
+                               gap=self._gap())
 
     def execute(self, sim):
         st, f = _fluid(sim)
         c = self.coeffs
         if c.mode == "beach":
-            r, xs = beach_shoreline(st.x[f], st.y[f], c.start, c.angle, self.ctx.dx,
-                                    length=c.length, still=c.still, band=c.band,
-                                    on_beach=c.shoreline in ("onBeach", "connected"),
-                                    gap=self._gap())
+            r, xs = self.shoreline(st.x[f], st.y[f])
             if r > self.max or not math.isfinite(self.max):
                 self.x_max = xs if math.isfinite(r) else self.x_max
             self.max = float(np.fmax(self.max, r))
