@@ -215,6 +215,19 @@ if kinda == FLUID:
     sigma_a = max(sigma_a, s_ab)
 if kindb == FLUID:
     out_sigma[b] = max(out_sigma[b], s_ab)"""
+#: T(3.89) where the boundary keeps massless (dormant) particles in the list
+#: (``Boundary.massless_ghosts``): a neighbour of mass 0 is no neighbour, in this maximum as
+#: in every mass-weighted sum
+_SIGMA_MASSIVE = """\
+s_ab = abs(h * vdotr / (r2 + eta2)) if mb > 0.0 else 0.0
+sigma_a = max(sigma_a, s_ab)
+"""
+_SIGMA_HALF_MASSIVE = """\
+s_ab = abs(h * vdotr / (r2 + eta2))
+if kinda == FLUID and mb > 0.0:
+    sigma_a = max(sigma_a, s_ab)
+if kindb == FLUID and ma > 0.0:
+    out_sigma[b] = max(out_sigma[b], s_ab)"""
 #: the same for a fluid pair
 _SIGMA_FF = """\
 s_ab = abs(h * vdotr / (r2 + eta2))
@@ -227,6 +240,9 @@ class Assembly:
 
     def __init__(self, sel: Selection):
         self.sel = sel
+        #: the boundary keeps particles of mass 0 in the neighbour list (dormant mirror
+        #: ghosts): the maximum of T(3.89), the one sum not weighted by mass, skips them
+        self.massless_ghosts = bool(getattr(sel.boundary, "massless_ghosts", False))
         self.models = sel.models()
         self.terms = T.order(T.collect(self.models))
         self.kinds, self.viscous_dry_walls = self._kinds()
@@ -382,7 +398,7 @@ class Assembly:
         if disp:
             code += "\n" + disp
         if sigma:
-            code += "\n" + _SIGMA
+            code += "\n" + (_SIGMA_MASSIVE if self.massless_ghosts else _SIGMA)
         return code
 
     def _dispatch(self, rest: list, i: str = "b", part: str = "pair") -> str:
@@ -625,7 +641,7 @@ class Assembly:
         side_a, side_b = "\n".join(x for x in side_a if x), "\n".join(x for x in side_b if x)
         pair_code = (side_a or "pass") + "\n" + (side_b or "pass")
         if sigma:
-            pair_code += "\n" + _SIGMA_HALF
+            pair_code += "\n" + (_SIGMA_HALF_MASSIVE if self.massless_ghosts else _SIGMA_HALF)
         ff = self._fluid_fluid(common, own, sigma)
         if ff is not None:
             # the common case, a fluid pair, in straight-line code of its own: the same terms

@@ -112,7 +112,8 @@ class Simulation:
         self.segments = list(segments)
         self._hooks = {name: sel.hooks(name) for name in
                        ("before_neighbours", "add_particles", "after_sort",
-                        "before_evaluation", "walls_moved", "after_step", "keeps_neighbours")}
+                        "before_evaluation", "after_rates", "walls_moved", "after_step",
+                        "keeps_neighbours")}
         #: the models that make the advection velocity, applied in selection order, each to
         #: the previous one's result (XSPH, then a particle shifting)
         self._advection = sel.hooks("advection_velocity")
@@ -280,6 +281,7 @@ class Simulation:
             self.pipeline.rates_half(*args, self._half, st.ax, st.ay, st.drho, st.sigma)
         else:
             self.pipeline.rates(*args, st.ax, st.ay, st.drho, st.sigma)
+        self._run_hooks("after_rates")
 
     def density_rate(self):
         self._run_hooks("before_evaluation")

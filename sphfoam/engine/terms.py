@@ -117,6 +117,13 @@ class Term:
     #: uc, XSPH's corrected uc); "" (e.g. a kernel correction, which depends on a's moment
     #: matrix alone) keeps the gather
     parity: str = ""
+    #: False when the pair code adds to a sum something that does not vanish for a neighbour
+    #: of mass 0 (a neighbour count, a maximum, an unweighted kernel sum). A boundary that
+    #: keeps massless particles in the list (dormant mirror ghosts, ``massless_ghosts``)
+    #: keeps them out of the support of every particle such a term sees them from (by
+    #: rebuilding the list). The definers of pair quantities (W, gradW, uc) count as weighted:
+    #: what reads them is
+    weighted: bool = True
     #: the model that contributed it (set by :func:`collect`)
     owner: object = field(default=None, compare=False)
 

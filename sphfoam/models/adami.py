@@ -109,7 +109,7 @@ class Adami(Boundary):
                                                     "field.corner")
         return [Term("wallState", ("prepass",), init=_INIT, pair=_PAIR, final=_FINAL + slip,
                      applies=("wall",), sees=("fluid",), reads=reads,
-                     writes=("rho", "u"), corrects=("p",))]
+                     writes=("rho", "u"), corrects=("p",), weighted=False)]
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
     def attach(self, sim):

@@ -41,6 +41,8 @@ selected model that implements them; the engine names no model):
                                    and without this hook gets a new list every step
 ``after_sort(sim, order)``         after the particles were re-sorted by ``order``
 ``before_evaluation(sim)``         before every evaluation of the pipeline (e.g. refresh ghosts)
+``after_rates(sim)``               after every evaluation of the rates: may add a force to
+                                   ``sim.state.ax, ay`` (e.g. a wall shear stress)
 ``walls_moved(sim, offsets, velocities)``  prescribed wall motion at a stage time
 ``after_step(sim)``                at the end of each step, before anything sees the state
 ``advection_velocity(sim, u, v)``  the velocity positions move with (e.g. XSPH); several are
@@ -59,7 +61,8 @@ __all__ = ["CaseContext", "PipelineModel", "Term", "HOOK_NAMES"]
 
 #: the run-time hooks above
 HOOK_NAMES = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
-              "before_evaluation", "walls_moved", "after_step", "advection_velocity", "summary")
+              "before_evaluation", "after_rates", "walls_moved", "after_step",
+              "advection_velocity", "summary")
 
 
 class PipelineModel(Model):

@@ -24,11 +24,13 @@ of a point rather than of a wall); its neighbours along either wall act with the
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from sphfoam.engine.state import GHOST
-from sphfoam.engine.terms import Term
+from sphfoam.engine.terms import Term, collect
 from sphfoam.models import mirror as gh
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
@@ -45,6 +47,9 @@ class Boundary(PipelineModel):
     #: per-particle fields (set-up writes them for wall particles) the generated code reads
     #: as ``fld[F_<name>, b]``
     wall_fields: tuple[str, ...] = ()
+    #: whether the boundary keeps particles of mass 0 in the neighbour list (dormant mirror
+    #: ghosts); the generated maximum of T(3.89) then skips them (sphfoam.engine.codegen)
+    massless_ghosts: bool = False
 
     @property
     def particle_fields(self) -> tuple[str, ...]:
@@ -146,7 +151,7 @@ class _Repulsive(Boundary):
 
     def terms(self):
         return [Term("wallForce", ("rates",), pair=self.force_code, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",))]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]
 
 
 @register
@@ -208,20 +213,88 @@ class MirrorGhosts(Boundary):
     u_sG = 2 U_s - u_sa. In the corner between two perpendicular walls a particle near both is
     also reflected across both (the corner ghost). Ghosts follow their particle through the
     stages of a step. Exact for straight walls and right-angled corners; at other angles only
-    the single reflections are made (T §3.8 on the limits of the method).
+    the single reflections are made (T §3.8 on the limits of the method). ``wallLaw`` adds the
+    shear stress of the law of the wall (T(3.84)-(3.85), or a prescribed U+) to a free-slip
+    wall, as a boundary integral over the wall line (see ``after_rates``).
     """
 
     name = "mirrorGhosts"
-    doc = "fluid mirrored across straight walls each step, T(3.77)-(3.80); free- or no-slip"
+    doc = ("fluid mirrored across straight walls each step, T(3.77)-(3.80); free- or no-slip; "
+           "wallLaw: the law of the wall's shear stress T(3.84)-(3.85) on a free-slip wall")
     wall_placement = "none"
+    massless_ghosts = True
 
     class Coeffs(Coeffs):
         noSlip: bool = Field(False, description="reflect the tangential velocity too "
                              "(no-slip); no: T(3.79), free slip as in P section 4")
+        pressure: Literal["mirror", "hydrostatic"] = Field(
+            "mirror", description="ghost pressure: `mirror` p_G = p_a, T(3.80); "
+            "`hydrostatic` p_G = p_a + rho_a g.(x_G - x_a), the wall's Neumann condition "
+            "dp/dn = rho g.n (Adami, Hu & Adams 2012, eq. (27), its hydrostatic part)")
+        wallLaw: Literal["none", *gh.WALL_SHEAR_LAWS] = Field(
+            "none", description="wall shear stress of the law of the wall on free-slip "
+            "ghosts: `smooth` T(3.84), `rough` T(3.85) (needs ks), `prescribedUPlus` "
+            "u_t = UPlus u* (needs UPlus), `none` (frictionless free slip)")
+        ks: float | None = Field(None, gt=0.0, description="roughness length ks of T(3.85) "
+                                 "(m), wallLaw rough only")
+        UPlus: float | None = Field(None, gt=0.0, description="prescribed U+ = u_t/u*, "
+                                    "wallLaw prescribedUPlus only (T §5.3.3)")
+
+        @model_validator(mode="after")
+        def _wall_law(self):
+            for law, key in (("rough", "ks"), ("prescribedUPlus", "UPlus")):
+                given = getattr(self, key) is not None
+                if self.wallLaw == law and not given:
+                    raise ValueError(f"wallLaw {law} needs {key}")
+                if self.wallLaw != law and given:
+                    raise ValueError(f"{key} is used only with wallLaw {law} (wallLaw is "
+                                     f"{self.wallLaw})")
+            if self.wallLaw != "none" and self.noSlip:
+                raise ValueError(f"wallLaw {self.wallLaw} is the wall stress of a free-slip "
+                                 "wall: set noSlip no (a no-slip ghost already imposes the "
+                                 "viscous stress of zero wall velocity)")
+            return self
 
     def neighbour_kinds(self):
         """Ghosts are every non-fluid neighbour; they enter every term as fluid."""
         return {"ghost": "else"}
+
+    def params(self, ctx: CaseContext) -> dict[str, float]:
+        """No coefficient of the generated code; keeps the viscosity the smooth wall law
+        reads (the wall stress is added after the rates, :meth:`after_rates`)."""
+        self._nu = ctx.nu
+        return {}
+
+    # --- the wall shear stress (``wallLaw``) ------------------------------------------------
+    # A free-slip mirror wall exerts no tangential force. With ``wallLaw`` the wall exerts the
+    # shear stress of the law of the wall, tau_w = rho u*^2 (T(3.84)-(3.85), T §3.10), as a
+    # boundary integral (Kulasegaram et al. 2004; Ferrand et al. 2013 for the wall terms of
+    # unified semi-analytical walls): the stress on the wall line, spread over the fluid by
+    # the kernel, dv_a/dt = -(2/rho_a) int_wall tau_w W(x_a - x_w) ds. With tau_w taken from
+    # particle a itself (its tangential velocity relative to the wall at its distance d_a)
+    # the integral is 2 Phi(d_a) u*_a^2, Phi the kernel integrated along the line
+    # (:func:`sphfoam.models.mirror.line_kernel`); over a plane wall under uniform fluid the
+    # particles' forces add up to exactly tau_w per unit length, at any resolution (the factor
+    # 2: the fluid fills half of the kernel's support). Unlike the stress of a no-slip ghost,
+    # u_t/d across a particle spacing, this does not grow as dx shrinks: the law stands for
+    # the boundary layer no SPH resolution of a beach reaches.
+    @property
+    def after_rates(self):
+        return self._wall_shear if self.coeffs.wallLaw != "none" else None
+
+    def _wall_shear(self, sim):
+        st = sim.state
+        if getattr(self, "_phi", None) is None:
+            kernel = sim.pipeline.selection.kernel
+            self._phi = gh.line_kernel(kernel.W, sim.h, self.reach)
+        c = self.coeffs
+        coef = {"smooth": getattr(self, "_nu", None), "rough": c.ks,
+                "prescribedUPlus": c.UPlus}[c.wallLaw]
+        if coef is None:
+            raise RuntimeError("wallLaw smooth needs the viscosity: the pipeline was not "
+                               "built with this model's params")
+        gh.wall_shear(st.x, st.y, st.u, st.v, st.kind, self.seg, self.reach, self._phi,
+                      gh.WALL_SHEAR_LAWS[c.wallLaw], float(coef), st.ax, st.ay)
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
     # Ghosts are made when the neighbour list is built, for every fluid particle within the
@@ -231,8 +304,11 @@ class MirrorGhosts(Boundary):
     # the support and projecting onto the segment itself: exactly the ghosts a rebuild would
     # make. Dormant ones carry mass 0 through the step, so that they add exactly 0.0 to every
     # mass-weighted sum; ``keeps_neighbours`` asks for a rebuild when the active set is not
-    # that of a rebuild (a particle qualifies without a ghost) or a dormant ghost is within
-    # the support of a fluid particle (only where the walls are not convex).
+    # that of a rebuild (a particle qualifies without a ghost), or when a dormant ghost is
+    # within the support of a fluid particle (only where the walls are not convex: the toe of
+    # a beach, where it happens at nearly every step) and a selected term would not cancel it
+    # (``Term.weighted``; the generated maximum of T(3.89) skips massless neighbours, and no
+    # term of the registry that sees ghosts is unweighted).
     def attach(self, sim):
         if not sim.segments:
             raise ValueError("mirrorGhosts needs walls in system/particleDict")
@@ -244,7 +320,21 @@ class MirrorGhosts(Boundary):
         self.corners = gh.corner_pairs(sim.segments, 1e-9 * max(1.0, self.reach))
         self._ghost = None
         self._active = None
+        self._phi = None
         self.pushed_back = 0
+        self._hydro = (False, 0.0, 0.0, 1.0, 1.0, 1.0)
+        if self.coeffs.pressure == "hydrostatic":
+            prm = dict(zip(sim.pipeline.module.PARAMS, sim.pipeline.prm.tolist()))
+            if "eos_B" not in prm:
+                raise ValueError("mirrorGhosts pressure hydrostatic needs the tait equation "
+                                 "of state")
+            self._hydro = (True, prm["gx"], prm["gy"], prm["eos_rho0"], prm["eos_B"],
+                           prm["eos_gamma"])
+        #: the selected terms that see ghosts and add what a massless neighbour does not
+        #: cancel (Term.weighted False): only for them must a dormant ghost stay out of the
+        #: support of a fluid particle (the maximum of T(3.89) skips massless neighbours)
+        self.unweighted = [t.who() for t in collect(sim.pipeline.selection.models())
+                           if not t.weighted and set(t.sees) & {"ghost", "all"}]
 
     def before_neighbours(self, sim):
         st = sim.state
@@ -273,7 +363,7 @@ class MirrorGhosts(Boundary):
         gidx = np.arange(n0, n0 + ng)
         active = np.ones(ng, dtype=np.bool_)
         gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2, self.seg,
-                          self.coeffs.noSlip, active)
+                          self.coeffs.noSlip, active, *self._hydro)
         gcell, gout = sim.cells.bin(st.x[n0:], st.y[n0:])
         if gout:
             keep = np.concatenate([np.ones(n0, dtype=bool), gcell >= 0])
@@ -307,6 +397,8 @@ class MirrorGhosts(Boundary):
         if int(count.sum()) != n_on:
             return False
         self.before_evaluation(sim)
+        if not self.unweighted:
+            return True
         nb_start, nb_idx = sim._nb
         return not gh.dormant_ghost_near_fluid(st.x, st.y, st.kind, gidx, self._active,
                                                nb_start, nb_idx,
@@ -317,7 +409,7 @@ class MirrorGhosts(Boundary):
             st = sim.state
             gidx, src, s1, s2 = self._ghost
             gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
-                              self.seg, self.coeffs.noSlip, self._active)
+                              self.seg, self.coeffs.noSlip, self._active, *self._hydro)
 
     def walls_moved(self, sim, offsets, velocities):
         self.seg = gh.segment_array(sim.segments, offsets, velocities)
@@ -388,6 +480,6 @@ else:
     def terms(self):
         return [Term("wetDry", ("step",), applies=("wall",), sees=("fluid",),
                      init="bnd_count = 0", pair="bnd_count += 1", final=self._STEP_FINAL,
-                     reads=("field.nFull",), writes=("aux.bnd_wet", "rho")),
+                     reads=("field.nFull",), writes=("aux.bnd_wet", "rho"), weighted=False),
                 Term("wallForce", ("rates",), pair=_MONAGHAN_KOS, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",))]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]

@@ -14,6 +14,7 @@ import math
 import numpy as np
 from numba import njit, prange
 from sphfoam.engine.fastmath import FASTMATH
+from sphfoam.models.walllaw import rough_ustar, smooth_ustar, uplus_ustar
 
 _JIT = dict(cache=True, fastmath=set(FASTMATH))
 
@@ -109,11 +110,15 @@ def _reflect_velocity(u, v, seg, s, no_slip):
 
 
 @njit(parallel=True, **_JIT)
-def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip, active):
-    """Position, velocity, density (p_G = p_a, T(3.80)) and mass of every ghost from its
-    particle's current state. A ghost with ``active[j]`` False is *dormant*: it gets mass 0,
-    so that every mass-weighted sum over it adds exactly 0.0 (ghosts are kept between
-    rebuilds of the neighbour list: ``MirrorGhosts.keeps_neighbours``)."""
+def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip, active,
+                   hydro=False, gx=0.0, gy=0.0, rho0=1000.0, B=1.0, gamma=7.0):
+    """Position, velocity, density and mass of every ghost from its particle's current
+    state. Density: p_G = p_a, T(3.80); or, with ``hydro``, the pressure of the hydrostatic
+    Neumann condition dp/dn = rho g.n (the hydrostatic part of Adami, Hu & Adams 2012,
+    eq. (27), for one image), p_G = p_a + rho_a g.(x_G - x_a), as the density the Tait
+    equation T(3.27) (rho0, B, gamma) gives that pressure. A ghost with ``active[j]`` False
+    is *dormant*: it gets mass 0, so that every mass-weighted sum over it adds exactly 0.0
+    (ghosts are kept between rebuilds of the neighbour list: ``keeps_neighbours``)."""
     for j in prange(gidx.shape[0]):
         g = gidx[j]
         a = src[j]
@@ -132,6 +137,10 @@ def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip, active):
         u[g] = gu
         v[g] = gv
         rho[g] = rho[a]
+        if hydro:
+            pa = B * ((rho[a] / rho0) ** gamma - 1.0)
+            pg = pa + rho[a] * (gx * (px - x[a]) + gy * (py - y[a]))
+            rho[g] = rho0 * max(1.0 + pg / B, 1e-6) ** (1.0 / gamma)
         m[g] = m[a] if active[j] else 0.0
 
 
@@ -231,3 +240,74 @@ def corner_pairs(segments, tol: float) -> np.ndarray:
             if reaches(a, np.array(b.normal)) and reaches(b, np.array(a.normal)):
                 pairs.append((i, j))
     return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+
+#: the wall laws of :func:`wall_shear` (``law`` argument), with the coefficient each reads
+WALL_SHEAR_LAWS = {"smooth": 0, "rough": 1, "prescribedUPlus": 2}
+
+
+@njit(parallel=True, **_JIT)
+def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
+    """Add the wall shear stress of the law of the wall to the acceleration of every fluid
+    particle within ``reach`` of a wall segment, projecting onto it (the ghosts' criterion):
+
+        dv_a/dt += -2 Phi(d_a) u*_a^2 t_a,
+
+    d_a the particle's distance from the wall line, t_a the unit tangential velocity of a
+    relative to the wall, u*_a from the law at y = d_a with u_t = |v_a - U_w| tangential
+    (``law`` 0: smooth T(3.84), ``coef`` nu; 1: rough T(3.85), ``coef`` ks, y at least ks;
+    2: prescribed U+, ``coef`` U+), Phi(d) the kernel integrated along the wall line,
+    tabulated in ``phi`` at d = k reach/(len(phi) - 1). Returns how many particles felt it."""
+    nphi = phi.shape[0] - 1
+    scale = nphi / reach
+    count = 0
+    for a in prange(x.shape[0]):
+        if kind[a] != 0:
+            continue
+        for s in range(seg.shape[0]):
+            rx = x[a] - seg[s, 0]
+            ry = y[a] - seg[s, 1]
+            t = rx * seg[s, 2] + ry * seg[s, 3]
+            d = rx * seg[s, 4] + ry * seg[s, 5]
+            if not (d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]):
+                continue
+            ur = u[a] - seg[s, 7]
+            vr = v[a] - seg[s, 8]
+            un = ur * seg[s, 4] + vr * seg[s, 5]
+            tx = ur - un * seg[s, 4]
+            ty = vr - un * seg[s, 5]
+            ut = math.sqrt(tx * tx + ty * ty)
+            if ut <= 0.0:
+                continue
+            if law == 0:
+                us = smooth_ustar(ut, d, coef)
+            elif law == 1:
+                us = rough_ustar(ut, max(d, coef), coef)
+            else:
+                us = uplus_ustar(ut, coef)
+            k = d * scale
+            i = min(int(k), nphi - 1)
+            w = phi[i] + (k - i) * (phi[i + 1] - phi[i])
+            f = 2.0 * w * us * us / ut
+            ax[a] -= f * tx
+            ay[a] -= f * ty
+            count += 1
+    return count
+
+
+def line_kernel(kernel_w, h: float, reach: float, n: int = 257) -> np.ndarray:
+    """Phi(d) = int W(sqrt(d^2 + s^2), h) ds over the whole line, at d = k reach/(n - 1), the
+    kernel integrated along a wall line at distance d, scaled so that its trapezoidal integral
+    over 0 <= d <= reach is exactly 1/2 (the half-plane's share of the kernel): a plane wall
+    under a uniform lattice, sum_a V_a Phi(d_a) = 1/2 per unit length, so :func:`wall_shear`
+    exerts exactly the wall stress on it. ``kernel_w(r, h)`` the kernel (numpy)."""
+    from scipy.integrate import quad
+
+    d = np.linspace(0.0, reach, n)
+    out = np.zeros(n)
+    for i, di in enumerate(d[:-1]):
+        top = math.sqrt(max(reach * reach - di * di, 0.0))
+        out[i] = 2.0 * quad(lambda s: float(kernel_w(math.hypot(di, s), h)), 0.0, top,
+                            limit=200)[0]
+    total = float(np.sum(0.5 * (out[1:] + out[:-1])) * (d[1] - d[0]))
+    return out * (0.5 / total)

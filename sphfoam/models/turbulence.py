@@ -199,7 +199,10 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
               if _wall_law_boundary(cls())]
         return [("wallLaw", f"wallLaw {self.wall_law} needs wall particles that enter the "
                  f"SPS stress as fluid; boundary {bnd.name} has none. Boundaries it works "
-                 f"with: {', '.join(ok)}; or set wallLaw none")]
+                 f"with: {', '.join(ok)}; or set wallLaw none"
+                 + ("; mirrorGhosts takes the law of the wall as its own key, boundary "
+                    "{ type mirrorGhosts; wallLaw ...; }" if bnd.name == "mirrorGhosts"
+                    else ""))]
 
 
 def _wall_law_boundary(bnd) -> bool:
