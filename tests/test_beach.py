@@ -246,11 +246,12 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
     plunges (Grilli's slope parameter S0 = 1.521 tan(5°)/sqrt(H/d) = 0.19, plunging for
     0.025 < S0 < 0.3), with the tutorial's models (free-slip mirror ghosts, no SPS) and
     its settling (0.2 s here). The run-up (the tutorial's `shoreline onBeach`) is written,
-    consistent with its x on the beach and above half the depth (0.71 d when written: the
-    tongue rises to its maximum at about 3.3 s; the tutorial's earlier hybrid walls with SPS
+    consistent with its x on the beach and above half the depth (0.74 d when written, at
+    3.08 s, with the tutorial's hydrostatic ghosts and smooth wall law; 0.71 d on the
+    frictionless ghosts of T(3.80) before them; the tutorial's earlier hybrid walls with SPS
     and the wall law stopped it at 0.1 d, issue 14); the breaking point by the tutorial's kinematic criterion is found on the
-    beach after the crest passed the toe gauge and before the maximum run-up; the geometric one is not measured (the
-    crest stands 2.5 dx high: its face is less than dx high, NaN by design), and the
+    beach after the crest passed the toe gauge and before the maximum run-up; the geometric one is not meaningful (the
+    crest stands 2.5 dx high: its face is about dx high), and the
     tutorial's metrics evaluate. (At d/dx = 5 the crest particles outrun the crest only in
     the bore at the shoreline: this checks the machinery end to end, not T's breaking
     time.)"""
@@ -284,6 +285,10 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
         "system/controlDict:functions.breaking.toe": toe - 0.15,
         "system/controlDict:functions.breaking.after": toe,
         "system/controlDict:functions.breaking.minHeight": 0.02,
+        # five particles per depth: with the tutorial's hydrostatic ghosts and wall law the
+        # crest particles outrun the crest for single samples only (u/c = 1.002 at 1.70 s,
+        # 1.048 at 2.31 s, measured), so the machinery is checked without `persist`
+        "system/controlDict:functions.breaking.persist": 0.0,
         "system/controlDict:functions.shoreline.start": [toe, 0.0],
         "system/controlDict:functions.shoreline.length": length,
         "system/controlDict:functions.shoreline.still": d,
@@ -311,7 +316,9 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
     assert shore[i, 1] == pytest.approx((shore[i, 4] - toe) * math.tan(math.radians(5)) - d)
     assert toe < k["x"] <= toe + length * math.cos(math.radians(5))
     assert 0.0 < k["tToe"] < k["time"] < shore[i, 0]       # breaks before the maximum
-    assert math.isnan(g["time"])
+    # the geometric criterion needs the face resolved (the crest stands 2.5 dx high here):
+    # without `persist` a single sample can read a face (1.02 s, at x = 0.69 m, measured)
+    assert math.isnan(g["time"]) or 0.0 < g["tToe"] < g["time"] < shore[i, 0]
     assert [p.parent.name[:3] for p in (pp / "profiles/0").glob("*/profile.dat")] == ["1.0"]
     vals = evaluate_metrics(case, strict=False)
     assert vals["runUp"].value == pytest.approx(shore[i, 1])
