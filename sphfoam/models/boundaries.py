@@ -213,14 +213,20 @@ class MirrorGhosts(Boundary):
     u_sG = 2 U_s - u_sa. In the corner between two perpendicular walls a particle near both is
     also reflected across both (the corner ghost). Ghosts follow their particle through the
     stages of a step. Exact for straight walls and right-angled corners; at other angles only
-    the single reflections are made (T §3.8 on the limits of the method). ``wallLaw`` adds the
-    shear stress of the law of the wall (T(3.84)-(3.85), or a prescribed U+) to a free-slip
-    wall, as a boundary integral over the wall line (see ``after_rates``).
+    the single reflections are made (T §3.8 on the limits of the method).
+
+    Beyond the thesis: ``pressure hydrostatic`` gives each ghost p_G = p_a + rho_a g.(x_G -
+    x_a), the wall's Neumann condition dp/dn = rho g.n (the wall's own acceleration left
+    out), in place of T(3.80)'s p_G = p_a, under which the rows next to a bed settle
+    compressed; ``wallLaw`` adds the shear stress of the law of the wall (T(3.84)-(3.85), or
+    a prescribed U+) to a free-slip wall, as a boundary integral over the wall line (see
+    ``after_rates``).
     """
 
     name = "mirrorGhosts"
     doc = ("fluid mirrored across straight walls each step, T(3.77)-(3.80); free- or no-slip; "
-           "wallLaw: the law of the wall's shear stress T(3.84)-(3.85) on a free-slip wall")
+           "pressure hydrostatic: p_G = p_a + rho_a g.(x_G - x_a); wallLaw: the law of the "
+           "wall's shear stress T(3.84)-(3.85) on a free-slip wall")
     wall_placement = "none"
     massless_ghosts = True
 
@@ -268,8 +274,8 @@ class MirrorGhosts(Boundary):
     # --- the wall shear stress (``wallLaw``) ------------------------------------------------
     # A free-slip mirror wall exerts no tangential force. With ``wallLaw`` the wall exerts the
     # shear stress of the law of the wall, tau_w = rho u*^2 (T(3.84)-(3.85), T §3.10), as a
-    # boundary integral (Kulasegaram et al. 2004; Ferrand et al. 2013 for the wall terms of
-    # unified semi-analytical walls): the stress on the wall line, spread over the fluid by
+    # boundary integral (in the manner of the boundary-integral walls of Kulasegaram et al.
+    # 2004 and Ferrand et al. 2013): the stress on the wall line, spread over the fluid by
     # the kernel, dv_a/dt = -(2/rho_a) int_wall tau_w W(x_a - x_w) ds. With tau_w taken from
     # particle a itself (its tangential velocity relative to the wall at its distance d_a)
     # the integral is 2 Phi(d_a) u*_a^2, Phi the kernel integrated along the line
