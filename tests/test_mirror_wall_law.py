@@ -156,18 +156,20 @@ def test_rough_law_below_the_roughness_takes_its_value_at_ks(quartic):
 DX, H = 0.01, 0.013
 
 
-def _pipe(boundary):
+def _pipe(boundary, g=0.0):
     specs = dict(kernel={"type": "quartic", "hdx": 1.3},
                  equationOfState={"type": "tait", "speedOfSound": 20.0},
                  continuity={"type": "differenceForm"}, momentum={"type": "symmetric"},
                  viscosity={"type": "none"}, boundary=boundary)
     sel = Selection(*(registry.build(f, s) for f, s in specs.items()))
-    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=NU, g=(0.0, 0.0), fluid_height=0.1, c0=20.0)
+    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=NU, g=(0.0, -g), fluid_height=0.1, c0=20.0)
     return build_pipeline(sel, ctx)
 
 
-def _film_sim(pipe, u0):
-    """A film of fluid 6 dx deep on the bed of a 0.4 m box (no gravity), moving at u0."""
+def _box_sim(pipe, x, y, u, rho):
+    """Fluid particles at (x, y) moving at (u, 0) in a 0.4 m box open at the top, on mirror
+    ghosts (no gravity unless the pipeline has it); neighbours, equation of state and rates
+    evaluated once."""
     from sphfoam.case.schemas import ParticleDict
     from sphfoam.setup.geometry import segments_of
 
@@ -175,12 +177,10 @@ def _film_sim(pipe, u0):
         {"dx": DX, "walls": {"tank": {"type": "box", "min": (0, 0), "max": (0.4, 0.2),
                                       "open": "top"}},
          "fluid": {"w": {"type": "box", "min": (0, 0), "max": (0.4, 0.06)}}})
-    xs = (np.arange(40) + 0.5) * DX
-    ys = (np.arange(6) + 0.5) * DX
-    X, Y = (a.ravel() for a in np.meshgrid(xs, ys))
-    n = X.size
-    st = ParticleState(X, Y, np.full(n, u0), np.zeros(n), np.full(n, RHO0),
-                       np.full(n, RHO0 * DX * DX), np.full(n, FLUID))
+    n = len(x)
+    st = ParticleState(np.asarray(x, float), np.asarray(y, float), np.full(n, u),
+                       np.zeros(n), np.full(n, rho), np.full(n, RHO0 * DX * DX),
+                       np.full(n, FLUID))
     integ = registry.build("integrator", {"type": "monaghan2007"})
     sim = Simulation(st, pipe, integ, h=H, support=pipe.selection.kernel.support,
                      domain_lo=(-0.1, -0.1), domain_hi=(0.5, 0.4), beta=0.2,
@@ -190,6 +190,13 @@ def _film_sim(pipe, u0):
     sim.eos()
     sim.rates()
     return sim
+
+
+def _film_sim(pipe, u0):
+    """A film of fluid 6 dx deep on the bed of the box, moving at u0."""
+    X, Y = (a.ravel() for a in np.meshgrid((np.arange(40) + 0.5) * DX,
+                                           (np.arange(6) + 0.5) * DX))
+    return _box_sim(pipe, X, Y, u0, RHO0)
 
 
 def test_the_simulation_adds_the_wall_stress_to_the_rates():
@@ -236,8 +243,8 @@ def test_hydrostatic_ghost_pressure_is_the_neumann_condition():
     g = 9.81
     rho_a = RHO0 * 1.003
     for pressure in ("hydrostatic", "mirror"):
-        pipe = _pipe_g({"type": "mirrorGhosts", "pressure": pressure}, g)
-        st = _single(pipe, 0.2 * DX, 0.3 * DX, rho_a)
+        pipe = _pipe({"type": "mirrorGhosts", "pressure": pressure}, g)
+        st = _box_sim(pipe, [0.2 * DX], [0.3 * DX], 0.0, rho_a)
         eos = pipe.selection.equationOfState
         ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=NU, g=(0.0, -g), fluid_height=0.1, c0=20.0)
         ghosts = st.state.kind == GHOST
@@ -247,36 +254,6 @@ def test_hydrostatic_ghost_pressure_is_the_neumann_condition():
         expect = pa - rho_a * g * depth if pressure == "hydrostatic" else np.full(3, pa)
         assert ghosts.sum() == 3
         np.testing.assert_allclose(pg, expect, rtol=1e-9, atol=1e-9 * pa)
-
-
-def _pipe_g(boundary, g):
-    specs = dict(kernel={"type": "quartic", "hdx": 1.3},
-                 equationOfState={"type": "tait", "speedOfSound": 20.0},
-                 continuity={"type": "differenceForm"}, momentum={"type": "symmetric"},
-                 viscosity={"type": "none"}, boundary=boundary)
-    sel = Selection(*(registry.build(f, s) for f, s in specs.items()))
-    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=NU, g=(0.0, -g), fluid_height=0.1, c0=20.0)
-    return build_pipeline(sel, ctx)
-
-
-def _single(pipe, x, y, rho):
-    from sphfoam.case.schemas import ParticleDict
-    from sphfoam.setup.geometry import segments_of
-
-    pd = ParticleDict.model_validate(
-        {"dx": DX, "walls": {"tank": {"type": "box", "min": (0, 0), "max": (0.4, 0.2),
-                                      "open": "top"}},
-         "fluid": {"w": {"type": "box", "min": (0, 0), "max": (0.4, 0.06)}}})
-    st = ParticleState(np.array([x]), np.array([y]), np.zeros(1), np.zeros(1),
-                       np.array([rho]), np.array([RHO0 * DX * DX]), np.zeros(1, dtype=int))
-    integ = registry.build("integrator", {"type": "monaghan2007"})
-    sim = Simulation(st, pipe, integ, h=H, support=pipe.selection.kernel.support,
-                     domain_lo=(-0.1, -0.1), domain_hi=(0.5, 0.4), beta=0.2,
-                     force_condition=True, adjust_time_step=True, delta_t=1e-4,
-                     segments=segments_of(pd))
-    sim.neighbour_update()
-    sim.eos()
-    return sim
 
 
 def test_hydrostatic_ghosts_hold_the_tank_at_rest(tutorial):

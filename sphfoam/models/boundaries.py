@@ -32,6 +32,7 @@ from pydantic import Field, model_validator
 from sphfoam.engine.state import GHOST
 from sphfoam.engine.terms import Term, collect
 from sphfoam.models import mirror as gh
+from sphfoam.models import walllaw as wl
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
@@ -230,31 +231,16 @@ class MirrorGhosts(Boundary):
     wall_placement = "none"
     massless_ghosts = True
 
-    class Coeffs(Coeffs):
+    class Coeffs(wl.LawCoeffs):
         noSlip: bool = Field(False, description="reflect the tangential velocity too "
                              "(no-slip); no: T(3.79), free slip as in P section 4")
         pressure: Literal["mirror", "hydrostatic"] = Field(
             "mirror", description="ghost pressure: `mirror` p_G = p_a, T(3.80); "
             "`hydrostatic` p_G = p_a + rho_a g.(x_G - x_a), the wall's Neumann condition "
             "dp/dn = rho g.n (Adami, Hu & Adams 2012, eq. (27), its hydrostatic part)")
-        wallLaw: Literal["none", *gh.WALL_SHEAR_LAWS] = Field(
-            "none", description="wall shear stress of the law of the wall on free-slip "
-            "ghosts: `smooth` T(3.84), `rough` T(3.85) (needs ks), `prescribedUPlus` "
-            "u_t = UPlus u* (needs UPlus), `none` (frictionless free slip)")
-        ks: float | None = Field(None, gt=0.0, description="roughness length ks of T(3.85) "
-                                 "(m), wallLaw rough only")
-        UPlus: float | None = Field(None, gt=0.0, description="prescribed U+ = u_t/u*, "
-                                    "wallLaw prescribedUPlus only (T §5.3.3)")
 
         @model_validator(mode="after")
-        def _wall_law(self):
-            for law, key in (("rough", "ks"), ("prescribedUPlus", "UPlus")):
-                given = getattr(self, key) is not None
-                if self.wallLaw == law and not given:
-                    raise ValueError(f"wallLaw {law} needs {key}")
-                if self.wallLaw != law and given:
-                    raise ValueError(f"{key} is used only with wallLaw {law} (wallLaw is "
-                                     f"{self.wallLaw})")
+        def _free_slip_law(self):
             if self.wallLaw != "none" and self.noSlip:
                 raise ValueError(f"wallLaw {self.wallLaw} is the wall stress of a free-slip "
                                  "wall: set noSlip no (a no-slip ghost already imposes the "

@@ -20,13 +20,19 @@ _JIT = dict(cache=True, fastmath=set(FASTMATH))
 
 
 @njit(**_JIT, inline="always")
+def _local(xa, ya, seg, s):
+    """(t, d): the position of (xa, ya) along segment ``s`` from its start and its signed
+    distance from the wall line, positive on the fluid side."""
+    rx = xa - seg[s, 0]
+    ry = ya - seg[s, 1]
+    return rx * seg[s, 2] + ry * seg[s, 3], rx * seg[s, 4] + ry * seg[s, 5]
+
+
+@njit(**_JIT, inline="always")
 def _near(xa, ya, seg, s, reach, margin=0.0):
     """Particle (xa, ya) is on the fluid side of segment ``s``, closer than ``reach`` and
     projecting onto it (extended by ``margin`` at both ends)."""
-    rx = xa - seg[s, 0]
-    ry = ya - seg[s, 1]
-    t = rx * seg[s, 2] + ry * seg[s, 3]
-    d = rx * seg[s, 4] + ry * seg[s, 5]
+    t, d = _local(xa, ya, seg, s)
     return d > 0.0 and d < reach and t >= -margin and t <= seg[s, 6] + margin
 
 
@@ -78,10 +84,7 @@ def push_back(x, y, u, v, kind, seg, reach):
         if kind[a] != 0:
             continue
         for s in range(seg.shape[0]):
-            rx = x[a] - seg[s, 0]
-            ry = y[a] - seg[s, 1]
-            t = rx * seg[s, 2] + ry * seg[s, 3]
-            d = rx * seg[s, 4] + ry * seg[s, 5]
+            t, d = _local(x[a], y[a], seg, s)
             if d <= 0.0 and d > -reach and t >= 0.0 and t <= seg[s, 6]:
                 x[a] -= 2.0 * d * seg[s, 4]
                 y[a] -= 2.0 * d * seg[s, 5]
@@ -265,12 +268,9 @@ def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
         if kind[a] != 0:
             continue
         for s in range(seg.shape[0]):
-            rx = x[a] - seg[s, 0]
-            ry = y[a] - seg[s, 1]
-            t = rx * seg[s, 2] + ry * seg[s, 3]
-            d = rx * seg[s, 4] + ry * seg[s, 5]
-            if not (d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]):
+            if not _near(x[a], y[a], seg, s, reach):
                 continue
+            d = _local(x[a], y[a], seg, s)[1]
             ur = u[a] - seg[s, 7]
             vr = v[a] - seg[s, 8]
             un = ur * seg[s, 4] + vr * seg[s, 5]

@@ -7,7 +7,7 @@ pipeline.
 from __future__ import annotations
 
 import math
-from typing import ClassVar, Literal
+from typing import ClassVar
 
 from pydantic import Field, model_validator
 
@@ -26,34 +26,18 @@ class Turbulence(PipelineModel):
     prefix = "turb_"
 
 
-class WallLawCoeffs(Coeffs):
+class WallLawCoeffs(wl.LawCoeffs):
     """The turbulent wall condition's coefficients (T §3.10), shared by the closures."""
 
     #: whether ``wallDelta`` means something without a wall law (the mixing length's eta)
     delta_without_law: ClassVar[bool] = False
 
-    wallLaw: Literal["none", *wl.LAWS] = Field(
-        "none", description="turbulent wall condition, T §3.10: `smooth` law of the wall "
-        "T(3.84), `rough` T(3.85) (needs ks), `prescribedUPlus` u_t = UPlus u* (needs UPlus), "
-        "`none` (nothing added)")
     wallDelta: float = Field(0.1, gt=0.0, description="distance delta of the wall "
                              "particles from the physical wall, in particle spacings dx "
                              "(T §3.10: dx/10)")
-    ks: float | None = Field(None, gt=0.0, description="roughness length ks of T(3.85) "
-                             "(m), wallLaw rough only")
-    UPlus: float | None = Field(None, gt=0.0, description="prescribed U+ = u_t/u*, wallLaw "
-                                "prescribedUPlus only (T §5.3.3: 1 < U+ < 2 best)")
 
     @model_validator(mode="after")
-    def _wall_law_coeffs(self):
-        need = {"rough": "ks", "prescribedUPlus": "UPlus"}
-        for law, key in need.items():
-            given = getattr(self, key) is not None
-            if self.wallLaw == law and not given:
-                raise ValueError(f"wallLaw {law} needs {key}")
-            if self.wallLaw != law and given:
-                raise ValueError(f"{key} is used only with wallLaw {law} (wallLaw is "
-                                 f"{self.wallLaw})")
+    def _wall_delta(self):
         if self.wallLaw == "none" and "wallDelta" in self.model_fields_set and \
                 not self.delta_without_law:
             raise ValueError("wallDelta is used only with a wallLaw (smooth, rough, "

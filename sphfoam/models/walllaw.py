@@ -44,10 +44,13 @@ near-wall SPS stress).
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 from numba import njit
+from pydantic import Field, model_validator
 
 from sphfoam.engine.terms import Term
+from sphfoam.registry import Coeffs
 
 #: von Karman constant of T(3.84)-(3.85)
 KAPPA = 0.41
@@ -114,6 +117,30 @@ _CALLS = {
 IMPORTS = {law: f"from sphfoam.models.walllaw import {call.split('= ')[1].split('(')[0]}"
            for law, call in _CALLS.items()}
 LAWS = tuple(_CALLS)
+
+
+class LawCoeffs(Coeffs):
+    """The choice of law and its coefficient, shared by the turbulence closures' wall
+    condition and the mirror ghosts' wall shear stress."""
+
+    wallLaw: Literal["none", *LAWS] = Field(
+        "none", description="the law of the wall, T §3.10: `smooth` T(3.84), `rough` T(3.85) "
+        "(needs ks), `prescribedUPlus` u_t = UPlus u* (needs UPlus), `none` (nothing added)")
+    ks: float | None = Field(None, gt=0.0, description="roughness length ks of T(3.85) "
+                             "(m), wallLaw rough only")
+    UPlus: float | None = Field(None, gt=0.0, description="prescribed U+ = u_t/u*, wallLaw "
+                                "prescribedUPlus only (T §5.3.3: 1 < U+ < 2 best)")
+
+    @model_validator(mode="after")
+    def _law_coeffs(self):
+        for law, key in (("rough", "ks"), ("prescribedUPlus", "UPlus")):
+            given = getattr(self, key) is not None
+            if self.wallLaw == law and not given:
+                raise ValueError(f"wallLaw {law} needs {key}")
+            if self.wallLaw != law and given:
+                raise ValueError(f"{key} is used only with wallLaw {law} (wallLaw is "
+                                 f"{self.wallLaw})")
+        return self
 
 _INIT = """\
 wl_nx = fld[F_nx, a]
