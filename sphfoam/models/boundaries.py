@@ -252,10 +252,9 @@ class MirrorGhosts(Boundary):
         return {"ghost": "else"}
 
     def params(self, ctx: CaseContext) -> dict[str, float]:
-        """No coefficient of the generated code; keeps the viscosity the smooth wall law
-        reads (the wall stress is added after the rates, :meth:`after_rates`)."""
-        self._nu = ctx.nu
-        return {}
+        """The viscosity the smooth wall law reads (the wall stress is added after the rates,
+        :meth:`after_rates`, which takes it from the pipeline's coefficients)."""
+        return {"bnd_wlnu": ctx.nu} if self.coeffs.wallLaw == "smooth" else {}
 
     # --- the wall shear stress (``wallLaw``) ------------------------------------------------
     # A free-slip mirror wall exerts no tangential force. With ``wallLaw`` the wall exerts the
@@ -276,17 +275,8 @@ class MirrorGhosts(Boundary):
 
     def _wall_shear(self, sim):
         st = sim.state
-        if getattr(self, "_phi", None) is None:
-            kernel = sim.pipeline.selection.kernel
-            self._phi = gh.line_kernel(kernel.W, sim.h, self.reach)
-        c = self.coeffs
-        coef = {"smooth": getattr(self, "_nu", None), "rough": c.ks,
-                "prescribedUPlus": c.UPlus}[c.wallLaw]
-        if coef is None:
-            raise RuntimeError("wallLaw smooth needs the viscosity: the pipeline was not "
-                               "built with this model's params")
-        gh.wall_shear(st.x, st.y, st.u, st.v, st.kind, self.seg, self.reach, self._phi,
-                      gh.WALL_SHEAR_LAWS[c.wallLaw], float(coef), st.ax, st.ay)
+        gh.wall_shear(st.x, st.y, st.u, st.v, st.kind, self.seg, self.reach, *self._shear,
+                      st.ax, st.ay)
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
     # Ghosts are made when the neighbour list is built, for every fluid particle within the
@@ -312,11 +302,18 @@ class MirrorGhosts(Boundary):
         self.corners = gh.corner_pairs(sim.segments, 1e-9 * max(1.0, self.reach))
         self._ghost = None
         self._active = None
-        self._phi = None
         self.pushed_back = 0
+        c = self.coeffs
+        prm = dict(zip(sim.pipeline.module.PARAMS, sim.pipeline.prm.tolist()))
+        #: (Phi table, law, its coefficient) of :func:`sphfoam.models.mirror.wall_shear`
+        self._shear = None
+        if c.wallLaw != "none":
+            coef = {"smooth": prm.get("bnd_wlnu"), "rough": c.ks,
+                    "prescribedUPlus": c.UPlus}[c.wallLaw]
+            self._shear = (gh.line_kernel(sim.pipeline.selection.kernel.W, sim.h, self.reach),
+                           gh.WALL_SHEAR_LAWS[c.wallLaw], float(coef))
         self._hydro = (False, 0.0, 0.0, 1.0, 1.0, 1.0)
-        if self.coeffs.pressure == "hydrostatic":
-            prm = dict(zip(sim.pipeline.module.PARAMS, sim.pipeline.prm.tolist()))
+        if c.pressure == "hydrostatic":
             if "eos_B" not in prm:
                 raise ValueError("mirrorGhosts pressure hydrostatic needs the tait equation "
                                  "of state")

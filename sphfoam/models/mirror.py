@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit, prange
 from sphfoam.engine.fastmath import FASTMATH
-from sphfoam.models.walllaw import rough_ustar, smooth_ustar, uplus_ustar
+from sphfoam.models.walllaw import LAWS, rough_ustar, smooth_ustar, uplus_ustar
 
 _JIT = dict(cache=True, fastmath=set(FASTMATH))
 
@@ -245,8 +245,9 @@ def corner_pairs(segments, tol: float) -> np.ndarray:
     return np.array(pairs, dtype=np.int64).reshape(-1, 2)
 
 
-#: the wall laws of :func:`wall_shear` (``law`` argument), with the coefficient each reads
+#: the ``law`` argument of :func:`wall_shear` (its branches) for each law of the wall
 WALL_SHEAR_LAWS = {"smooth": 0, "rough": 1, "prescribedUPlus": 2}
+assert set(WALL_SHEAR_LAWS) == set(LAWS)
 
 
 @njit(parallel=True, **_JIT)
@@ -268,9 +269,9 @@ def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
         if kind[a] != 0:
             continue
         for s in range(seg.shape[0]):
-            if not _near(x[a], y[a], seg, s, reach):
+            t, d = _local(x[a], y[a], seg, s)
+            if not (d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]):
                 continue
-            d = _local(x[a], y[a], seg, s)[1]
             ur = u[a] - seg[s, 7]
             vr = v[a] - seg[s, 8]
             un = ur * seg[s, 4] + vr * seg[s, 5]
