@@ -40,9 +40,10 @@ import numpy as np
 
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
-from sphfoam.io.fields import read_state, write_state
 from sphfoam.runner import run_case, setup_case
 from sphfoam.sampling import channel_theory as ct
+from sphfoam.setup.channel import channel_width as _width
+from sphfoam.setup.channel import profile_function, uniform_start  # noqa: F401 (re-exported)
 
 HERE = Path(__file__).resolve().parent
 #: channel width of T section 3.4.1 (m)
@@ -80,15 +81,6 @@ def _edit(path: Path, edit) -> None:
     foamdict.write(path, d, header=header)
 
 
-def profile_function(case: Path) -> str:
-    """Name of the ``velocityProfile`` function object of a case's controlDict."""
-    funcs = foamdict.read(case / "system" / "controlDict").get("functions", {}) or {}
-    for name, spec in funcs.items():
-        if isinstance(spec, dict) and spec.get("type") == "velocityProfile":
-            return name
-    raise SystemExit(f"{case}/system/controlDict: no velocityProfile function object")
-
-
 def prepare(dst: Path, n: int, end_time: float, times=(), template: Path = HERE,
             plot: bool = False) -> Path:
     """A copy of a channel tutorial's constant/ and system/ (this one by default; the couette
@@ -116,30 +108,6 @@ def prepare(dst: Path, n: int, end_time: float, times=(), template: Path = HERE,
 
     _edit(dst / "system" / "controlDict", control)
     return dst
-
-
-def _width(case: Path) -> float:
-    """Channel width l of the case's velocityProfile function object."""
-    funcs = foamdict.read(case / "system" / "controlDict").get("functions", {}) or {}
-    return float(funcs[profile_function(case)]["l"])
-
-
-def uniform_start(case: Path, velocity=None) -> None:
-    """Rewrite ``case/0`` at rho = rho0, mass = rho0 dx^2, p = 0 (and u_x = velocity(y) of the
-    fluid particles if given: a callable of y, or a number)."""
-    c = Case(case)
-    folder = Path(case) / "0"
-    s = read_state(folder)
-    rho0, dx = c.context.rho0, c.context.dx
-    s["rho"][:] = rho0
-    s["mass"][:] = rho0 * dx * dx
-    if "p" in s:
-        s["p"][:] = 0.0
-    if velocity is not None:
-        fluid = s["type"] == 0
-        y = s["positions"][fluid, 1]
-        s["U"][fluid, 0] = velocity(y) if callable(velocity) else float(velocity)
-    write_state(folder, s, fmt=c.control.writeFormat, precision=c.control.writePrecision)
 
 
 def read_profile_summary(case: Path) -> np.ndarray:

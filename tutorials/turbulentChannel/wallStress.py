@@ -28,22 +28,19 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from sphfoam.case import foamdict
+from sphfoam.case.case import Case
+from sphfoam.case.times import list_times
+from sphfoam.io.fields import has_particles, read_state
+from sphfoam.models.walllaw import B_SMOOTH, KAPPA, smooth_ustar
+from sphfoam.setup.channel import channel_width as _width
+from sphfoam.setup.channel import profile_function, uniform_start
+
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "poiseuille"))
-
-from convergence import _width, profile_function, uniform_start  # noqa: E402
-
-from sphfoam.case.case import Case  # noqa: E402
-from sphfoam.case import foamdict  # noqa: E402
-from sphfoam.io.fields import read_state  # noqa: E402
-from sphfoam.case.times import list_times  # noqa: E402
-from sphfoam.io.fields import has_particles  # noqa: E402
-from sphfoam.models.walllaw import B_SMOOTH, KAPPA, smooth_ustar  # noqa: E402
 
 
 def walls(case: Path) -> tuple[float, float]:
