@@ -284,11 +284,19 @@ def plot_lines(case: Case, name: str, fo, wave, theory: str, n_times: int = 6) -
 
 def run_up_reference(mode: str, A: float, d: float, angle: float | None = None):
     """[(label, R)] of the maximum run-up of a solitary wave of height A in depth d: on a
-    vertical wall, linear theory 2A and the second-order 2A + A^2/(2d) (Su & Mirie 1980);
+    vertical wall, linear theory 2A, Su & Mirie's (1980) third order
+    R/d = 2a + a^2/2 + 3a^3/4 and, for a = A/d <= 0.45, the fully nonlinear potential flow
+    (:func:`sphfoam.sampling.wall_reflection.wall_reflection`, a few seconds the first time);
     on a plane beach, Synolakis (1987) R/d = 2.831 sqrt(cot beta) (A/d)^(5/4) (non-breaking)."""
     if mode == "wall":
-        return [("linear theory, 2A", 2.0 * A),
-                ("Su & Mirie (1980), 2A + A²/2d", 2.0 * A + A * A / (2.0 * d))]
+        from sphfoam.sampling import wall_reflection as wr
+
+        refs = [("linear theory, 2A", 2.0 * A),
+                ("Su & Mirie (1980), third order", d * wr.su_mirie(A / d))]
+        if 0.0 < A / d <= wr.MAX_EPS:
+            refs.append(("potential flow, fully nonlinear (HOS)",
+                         d * wr.wall_reflection(round(A / d, 12)).run_up))
+        return refs
     if angle and angle > 0:
         cot = 1.0 / math.tan(math.radians(angle))
         return [("Synolakis (1987), non-breaking", 2.831 * d * math.sqrt(cot) * (A / d) ** 1.25)]
@@ -307,7 +315,7 @@ def plot_run_up(case: Case, name: str, fo, wave) -> Path | None:
     ax.plot(data[:, 0], data[:, 2], "b:", lw=1, label="running maximum")
     if wave is not None:
         for (label, R), ls in zip(run_up_reference(fo.coeffs.mode, wave[1], wave[2],
-                                                   fo.coeffs.angle), ("k--", "k-.")):
+                                                   fo.coeffs.angle), ("k--", "k-.", "k:")):
             ax.axhline(R, color="k", ls=ls[1:], lw=1, label=f"{label} = {R:.4g} m")
     ax.set(xlabel="t (s)", ylabel="R (m)", title=f"{case.name}: {name} (runUp, "
            f"{fo.coeffs.mode})")

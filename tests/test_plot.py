@@ -97,10 +97,13 @@ def test_dam_break_front_profile_and_missing_output(tutorial):
 
 
 def test_references():
-    """Run-up: 2A and 2A + A^2/(2d) on a wall; Synolakis's law on a beach."""
+    """Run-up: 2A, Su & Mirie's third order and the fully nonlinear potential flow on a wall
+    (A/d = 0.3: 0.66525 d and 0.66020 d); Synolakis's law on a beach."""
     ref = dict(run_up_reference("wall", 3.0, 10.0))
     assert ref["linear theory, 2A"] == 6.0
-    assert ref["Su & Mirie (1980), 2A + A²/2d"] == pytest.approx(6.45)
+    assert ref["Su & Mirie (1980), third order"] == pytest.approx(6.6525)
+    assert ref["potential flow, fully nonlinear (HOS)"] == pytest.approx(6.6020, abs=1e-3)
+    assert len(run_up_reference("wall", 5.0, 10.0)) == 2      # beyond the HOS method's range
     ((_, R),) = run_up_reference("beach", 0.1, 1.0, angle=math.degrees(math.atan(1 / 19.85)))
     assert R == pytest.approx(2.831 * math.sqrt(19.85) * 0.1 ** 1.25, rel=1e-9)
 

@@ -219,9 +219,9 @@ class EulerSolution:
                 break
         return zeta
 
-    def surface(self, x):
-        """eta at physical |x| < L/2 (units of d): Newton on x~(alpha) = x, with
-        x~ = alpha + sum a_m coth(k_m d') sin(k_m alpha), eta~ = <eta~> + sum a_m cos(k_m alpha)."""
+    def surface_alpha(self, x):
+        """alpha of the surface point at physical |x| < L/2: Newton on x~(alpha) = x, with
+        x~ = alpha + sum a_m coth(k_m d') sin(k_m alpha)."""
         x = np.asarray(x, float)
         xt, _ = self._table
         al = np.interp(x, xt, self._alpha_sorted)
@@ -232,7 +232,21 @@ class EulerSolution:
             al = al - step
             if np.max(np.abs(step), initial=0.0) < 1e-14:
                 break
-        return self.mean + (np.cos(k * al[:, None]) * self.a).sum(axis=1)
+        return al
+
+    def surface(self, x):
+        """eta at physical |x| < L/2 (units of d): eta~ = <eta~> + sum a_m cos(k_m alpha) at
+        the alpha of :meth:`surface_alpha`."""
+        al = self.surface_alpha(x)
+        return self.mean + (np.cos(self.km[None, :] * al[:, None]) * self.a).sum(axis=1)
+
+    def surface_potential(self, x):
+        """The laboratory-frame velocity potential on the surface, psi(x) = phi(x, eta(x)), at
+        physical |x| < L/2 (units d sqrt(g d)): W = -c' zeta in the wave frame is -c' alpha on
+        the surface, and phi = phi_wave + F x, so psi = F x - c' alpha; zero under the crest,
+        odd in x, tending to +-(F - c') L/2 (its step across the wave) at the grid's ends."""
+        x = np.asarray(x, float)
+        return self.F * x - self.cp * self.surface_alpha(x)
 
     @functools.cached_property
     def _table(self):
