@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sphfoam.sampling.wall_reflection import propagate, su_mirie, wall_reflection
+from sphfoam.sampling.wall_reflection import (head_on_collision, propagate, su_mirie,
+                                              wall_reflection)
 
 
 def test_exact_wave_is_carried_unchanged_and_the_error_falls_with_the_order():
@@ -44,3 +45,16 @@ def test_run_up_at_p_s_amplitude_is_converged():
 def test_amplitudes_outside_the_method_are_refused(eps):
     with pytest.raises(ValueError, match="0 < A/d"):
         wall_reflection(eps)
+
+
+def test_head_on_collision_of_equal_waves_is_the_wall_and_unequal_meets_third_order():
+    """Equal waves: the collision's peak is the wall's run-up (the wall is the plane of
+    symmetry). P's collision, a1 = 0.3 and a2 = 0.2: the peak 0.5377 d lies above the linear
+    a1 + a2 and within 1 % below the third order of Su & Mirie (1980),
+    a1 + a2 + a1 a2 / 2 + 3 a1 a2 (a1 + a2) / 8 = 0.54125."""
+    equal = head_on_collision(0.2, 0.2, N=1024)
+    assert equal.peak == pytest.approx(wall_reflection(0.2).run_up, abs=1e-9)
+    p = head_on_collision(0.3, 0.2)
+    third = 0.5 + 0.3 * 0.2 / 2 + 3 * 0.3 * 0.2 * 0.5 / 8
+    assert 0.5 < p.peak < third and p.peak > 0.99 * third
+    assert p.peak == pytest.approx(0.53771, abs=1e-4)
