@@ -21,7 +21,8 @@ W_m = sum_{k=0}^{m-1} eta^k/k! d_z^(k+1) phi^(m-k), where d_z^k of a Fourier mod
 |kappa|^k for even k and |kappa|^k tanh(|kappa|) for odd k (the bed at z = -1). The products
 are truncated at order M as West et al.'s consistent scheme does: eta_x^2 W is kept to
 order M, and W^2 as sum_{i+j<=M} W_i W_j. Fourth-order Runge-Kutta in time; each right-hand
-side is filtered to the lower 2/3 of the spectrum (the waves' spectra end far below it).
+side is filtered to wavenumbers below kmax (8/d by default, and at most 2/3 of the grid's):
+the waves' spectra end below it, and round-off above it, multiplied by |kappa|^M, would grow.
 
 Converged (orders 8, 10, 12; N, dt, kmax and the start halved or doubled) the run-up reads
 R/d = 0.10133, 0.20555, 0.42413, 0.66020 and 0.9233 (+-0.001) at a = 0.05, 0.1, 0.2, 0.3 and
@@ -206,10 +207,7 @@ def wall_reflection(eps: float, order: int = 10, N: int = 1024, dt: float = 0.05
         raise RuntimeError(f"wall_reflection(A/d = {eps:g}): no peak at the wall by t = {t_end:g}")
     h = np.asarray(history[2:])
     i = int(np.argmax(h[1:-1])) + 1
-    a, b, c = h[i - 1], h[i], h[i + 1]
-    den = a - 2.0 * b + c
-    s = 0.5 * (a - c) / den if den != 0.0 else 0.0
-    R = b - 0.25 * (a - c) * s
+    s, R = _parabola_peak(h[i - 1], h[i], h[i + 1])
     return Reflection(eps=eps, run_up=float(R), time=float((i + s) * dt), X0=float(X0),
                       order=order, N=N, dt=dt,
                       volume_drift=abs(float(eta.sum()) - vol0) / vol0)
