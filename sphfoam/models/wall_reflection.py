@@ -165,7 +165,7 @@ def propagate(eps: float, time: float, order: int = 10, N: int = 1024, dt: float
     sol, X0, L = _layout(eps, decay)
     hos = _HOS(L, N, order, kmax)
     eta, psi = _wave(sol, hos.x)
-    U = -2.0 * (sol.F - sol.cp) * sol.x_half / L
+    U = -_psi_step(sol) / L
     psi = psi + U * hos.x
     steps = max(1, round(time / dt))
     dt = time / steps
@@ -175,42 +175,67 @@ def propagate(eps: float, time: float, order: int = 10, N: int = 1024, dt: float
     return hos.x, eta, _wave(sol, shifted)[0]
 
 
+def _psi_step(sol) -> float:
+    """Delta, the step of psi across one exact wave: (F - c') L over its solved period."""
+    return 2.0 * (sol.F - sol.cp) * sol.x_half
+
+
+def _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall: bool):
+    """Wave eps1 from -X0 meets wave eps2 from +X0: (peak, its time, X0, volume drift). The
+    peak is eta(0, t)'s (``at_wall``; equal waves) or the highest eta over x, each sample
+    refined by a parabola, then in t. Unequal waves' potentials step by different amounts,
+    so the periodic domain carries them on the uniform current U = -(Delta_1 - Delta_2)/L
+    that makes psi periodic; the maximum elevation does not depend on the frame."""
+    s1, s2 = euler_solution(eps1), euler_solution(eps2)
+    X0 = decay / min(s1.kd, s2.kd)
+    L = 4.0 * X0
+    hos = _HOS(L, N, order, kmax)
+    e1, p1 = _wave(s1, hos.x + X0)
+    e2, p2 = _wave(s2, X0 - hos.x)
+    eta, psi = e1 + e2, p1 + p2 - (_psi_step(s1) - _psi_step(s2)) / L * hos.x
+    vol0 = float(eta.sum())
+    wall = N // 2                                          # x = 0
+
+    def sample(eta):
+        if at_wall:
+            return eta[wall]
+        j = int(np.argmax(eta))
+        return _parabola_peak(eta[j - 1], eta[j], eta[(j + 1) % N])[1]
+
+    history = [sample(eta)]
+    t_end = (1.6 if at_wall else 2.0) * X0 / min(s1.F, s2.F)
+    for _ in range(int(math.ceil(t_end / dt))):
+        eta, psi = hos.step(eta, psi, dt)
+        history.append(sample(eta))
+        if not math.isfinite(history[-1]):
+            raise RuntimeError(f"HOS collision of A/d = {eps1:g} and {eps2:g} (order {order}, "
+                               f"kmax {kmax:g}) diverged: lower kmax or order")
+        top = max(history)
+        if len(history) > 3 and history[-1] < history[-2] < history[-3] < top and \
+                top > (2.0 if at_wall else 1.05) * max(eps1, eps2):   # past the peak
+            break
+    else:
+        raise RuntimeError(f"HOS collision of A/d = {eps1:g} and {eps2:g}: no peak by "
+                           f"t = {t_end:g}")
+    h = np.asarray(history)
+    i = int(np.argmax(h[1:-1])) + 1
+    s, peak = _parabola_peak(h[i - 1], h[i], h[i + 1])
+    return float(peak), float((i + s) * dt), float(X0), abs(float(eta.sum()) - vol0) / vol0
+
+
 @functools.lru_cache(maxsize=16)
 def wall_reflection(eps: float, order: int = 10, N: int = 1024, dt: float = 0.05,
                     decay: float = 16.0, kmax: float = 8.0) -> Reflection:
     """The maximum run-up of a solitary wave of height ``eps`` = A/d at a vertical wall, by
-    the HOS method of West et al. (1987) from the exact wave (see the module docstring).
+    the HOS method of West et al. (1987) from the exact wave (see the module docstring):
+    the wave meets its mirror image, and eta(0, t) is the wall's.
     ``decay``: the crest starts decay/kd from the wall (the wave's tail e^(-decay) there)."""
     if not 0.0 < eps <= MAX_EPS:
         raise ValueError(f"wall_reflection needs 0 < A/d <= {MAX_EPS}, got {eps:g} (above it "
                          "the expansion about z = 0 diverges where the run-up nears the depth)")
-    sol, X0, L = _layout(eps, decay)
-    hos = _HOS(L, N, order, kmax)
-    e1, p1 = _wave(sol, hos.x + X0)
-    e2, p2 = _wave(sol, X0 - hos.x)
-    eta, psi = e1 + e2, p1 + p2
-    wall = N // 2                                          # x = 0
-    vol0 = float(eta.sum())
-    history = [eta[wall]] * 3
-    t_end = 1.6 * X0 / sol.F
-    steps = int(math.ceil(t_end / dt))
-    for _ in range(steps):
-        eta, psi = hos.step(eta, psi, dt)
-        history.append(eta[wall])
-        if not math.isfinite(history[-1]):
-            raise RuntimeError(f"wall_reflection(A/d = {eps:g}, order {order}, kmax {kmax:g}) "
-                               "diverged: lower kmax or order")
-        if history[-1] < history[-2] < history[-3] < 0.9 * max(history) and \
-                max(history) > 2.0 * eps:                 # past the peak of the reflection
-            break
-    else:
-        raise RuntimeError(f"wall_reflection(A/d = {eps:g}): no peak at the wall by t = {t_end:g}")
-    h = np.asarray(history[2:])
-    i = int(np.argmax(h[1:-1])) + 1
-    s, R = _parabola_peak(h[i - 1], h[i], h[i + 1])
-    return Reflection(eps=eps, run_up=float(R), time=float((i + s) * dt), X0=float(X0),
-                      order=order, N=N, dt=dt,
-                      volume_drift=abs(float(eta.sum()) - vol0) / vol0)
+    R, t, X0, drift = _collide(eps, eps, order, N, dt, decay, kmax, at_wall=True)
+    return Reflection(eps=eps, run_up=R, time=t, X0=X0, order=order, N=N, dt=dt,
+                      volume_drift=drift)
 
 
 def su_mirie(eps: float) -> float:
@@ -243,38 +268,9 @@ def head_on_collision(eps1: float, eps2: float, order: int = 10, N: int = 2048,
                       dt: float = 0.05, decay: float = 16.0, kmax: float = 8.0) -> Collision:
     """The highest elevation reached when a wave of height ``eps1`` (moving right from -X0)
     meets one of ``eps2`` (moving left from +X0), by the HOS method as
-    :func:`wall_reflection` (equal waves: the wall's run-up). The two waves' potentials
-    step by different amounts, so the periodic domain carries them on the uniform current
-    U = -(Delta_1 - Delta_2)/L that makes psi periodic; the maximum elevation does not depend
-    on the frame. Located by parabolas through the samples in x and then in t."""
+    :func:`wall_reflection` (equal waves: the wall's run-up)."""
     for e in (eps1, eps2):
         if not 0.0 < e <= MAX_EPS:
             raise ValueError(f"head_on_collision needs 0 < A/d <= {MAX_EPS}, got {e:g}")
-    s1, s2 = euler_solution(eps1), euler_solution(eps2)
-    X0 = decay / min(s1.kd, s2.kd)
-    L = 4.0 * X0
-    hos = _HOS(L, N, order, kmax)
-    e1, p1 = _wave(s1, hos.x + X0)
-    e2, p2 = _wave(s2, X0 - hos.x)
-    d1 = 2.0 * (s1.F - s1.cp) * s1.x_half
-    d2 = 2.0 * (s2.F - s2.cp) * s2.x_half
-    eta, psi = e1 + e2, p1 + p2 - (d1 - d2) / L * hos.x
-    history = []
-    t_end = 2.0 * X0 / min(s1.F, s2.F)
-    for _ in range(int(math.ceil(t_end / dt))):
-        j = int(np.argmax(eta))
-        history.append(_parabola_peak(eta[j - 1], eta[j], eta[(j + 1) % N])[1])
-        if not math.isfinite(history[-1]):
-            raise RuntimeError(f"head_on_collision({eps1:g}, {eps2:g}) diverged: lower kmax "
-                               "or order")
-        if len(history) > 3 and history[-1] < history[-2] < history[-3] and \
-                max(history) > 1.05 * max(eps1, eps2) and history[-3] < max(history):
-            break
-        eta, psi = hos.step(eta, psi, dt)
-    else:
-        raise RuntimeError(f"head_on_collision({eps1:g}, {eps2:g}): no peak by t = {t_end:g}")
-    h = np.asarray(history)
-    i = int(np.argmax(h[1:-1])) + 1
-    s, peak = _parabola_peak(h[i - 1], h[i], h[i + 1])
-    return Collision(eps1=eps1, eps2=eps2, peak=float(peak), time=float((i + s) * dt),
-                     X0=float(X0), order=order, N=N, dt=dt)
+    peak, t, X0, _ = _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall=False)
+    return Collision(eps1=eps1, eps2=eps2, peak=peak, time=t, X0=X0, order=order, N=N, dt=dt)
