@@ -173,10 +173,10 @@ def test_generated_loops_follow_the_neighbour_kinds():
     r = rates(rep)
     assert "if kindb == FLUID:" in r and "else:" in r
     wall_part = r[r.index("else:", r.index("if kindb == FLUID:")):]
-    assert "pi_ab" in wall_part.split("s_ab")[0]           # viscosity at a no-slip wall
+    assert "f_viscosity" in wall_part.split("s_ab")[0]           # viscosity at a no-slip wall
     s = rates(slip)
     wall_part = s[s.index("else:", s.index("if kindb == FLUID:")):]
-    assert "pi_ab" not in wall_part.split("s_ab")[0]
+    assert "f_viscosity" not in wall_part.split("s_ab")[0]
 
 
 def test_the_kernel_value_is_computed_only_where_read():

@@ -550,10 +550,10 @@ def test_no_viscosity_code_when_none_selected():
     none = _source(viscosity={"type": "none"})
     art = _source(viscosity={"type": "artificial", "alpha": 0.1})
     lam = _source(viscosity={"type": "laminar"})
-    assert "visc_" not in none and "pi_ab" not in none and "lam" not in none.replace(
+    assert "visc_" not in none and "f_viscosity" not in none and "lam" not in none.replace(
         "laminar", "")
-    assert "visc_alpha" in art and "pi_ab" in art and "visc_mu2" not in art
-    assert "visc_mu2" in lam and "pi_ab" not in lam and "visc_alpha" not in lam
+    assert "visc_alpha" in art and "f_viscosity" in art and "visc_mu2" not in art
+    assert "visc_mu2" in lam and "f_viscosity" not in lam and "visc_alpha" not in lam
     # the inviscid source is strictly shorter: nothing is left behind but the name
     assert len(none) < len(art) and len(none) < len(lam)
     compile(none, "<none>", "exec")

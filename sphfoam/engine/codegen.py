@@ -665,8 +665,24 @@ class Assembly:
         ts = [t for t in common + own if {"fluid", "all"} & self.sees(t)]
         if not ts:
             return None
-        code = [expand_components(t.pair) for t in ts if t.pair]
-        code += [expand_components(t.reaction) for t in ts if t.reaction]
+        # the force coefficients (Term.force, F_ab = F_ba) summed into one, applied once per
+        # side, where the first of them stood
+        forces = [t for t in ts if t.force]
+        fold_a = expand_components("f_ab = " + " + ".join(f"({t.force})" for t in forces)
+                                   + "\nacc_@ -= mb * f_ab * gW@") if len(forces) > 1 else ""
+        fold_b = expand_components("acc_b_@ += ma * f_ab * gW@") if fold_a else ""
+        code, code_b = [], []
+        for t in ts:
+            folded = fold_a and t.force
+            if t.pair and not folded:
+                code.append(expand_components(t.pair))
+            elif folded and t is forces[0]:
+                code.append(fold_a)
+            if t.reaction and not folded:
+                code_b.append(expand_components(t.reaction))
+            elif folded and t is forces[0]:
+                code_b.append(fold_b)
+        code += code_b
         if sigma:
             code.append(_SIGMA_FF)
         return "\n".join(code)

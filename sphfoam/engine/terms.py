@@ -124,8 +124,27 @@ class Term:
     #: rebuilding the list). The definers of pair quantities (W, gradW, uc) count as weighted:
     #: what reads them is
     weighted: bool = True
+    #: a pair force coefficient F_ab equal to F_ba (an expression of the pair and of
+    #: a's ``init`` names): the term adds -m_b F_ab grad_a W_ab to dv_a/dt and, over half
+    #: lists, +m_a F_ab grad_a W_ab to dv_b/dt. Its ``pair`` and ``reaction`` code are
+    #: written from it (give neither); where a fluid particle meets a fluid neighbour, the
+    #: coefficients of all such terms of the loop are summed first and the gradient applied
+    #: once (e.g. a pressure gradient and a viscous term along grad W: one product per
+    #: component and side instead of one per term)
+    force: str = ""
     #: the model that contributed it (set by :func:`collect`)
     owner: object = field(default=None, compare=False)
+
+    def __post_init__(self):
+        if self.force:
+            f = f"f_{self.name}"
+            pair = f"{f} = {self.force}\nacc_@ -= mb * {f} * gW@"
+            reaction = f"{f}_b = {self.force}\nacc_b_@ += ma * {f}_b * gW@"
+            if (self.pair or self.reaction) and (self.pair, self.reaction) != (pair, reaction):
+                raise ContractError(f"term {self.name!r}: a force term's pair and reaction "
+                                    "code are written from its force; give neither")
+            object.__setattr__(self, "pair", pair)
+            object.__setattr__(self, "reaction", reaction)
 
     @property
     def on_demand(self) -> bool:

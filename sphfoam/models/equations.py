@@ -47,15 +47,13 @@ class Momentum(PipelineModel):
     prefix = "mom_"
     #: lines run once per particle a before its pair loop
     init_code: str = ""
-    #: lines run inside the pair loop, adding the pressure term to acc_@
-    pair_code: str
-    #: the term of the pair (b, a), added to acc_b_@ (grad_b W_ba = -grad_a W_ab)
-    reaction_code: str = ""
+    #: the pressure term's symmetric pair coefficient F_ab: dv_a/dt -= m_b F_ab grad_a W_ab
+    #: (and, for the pair (b, a), dv_b/dt += m_a F_ab grad_a W_ab, grad_b W_ba = -grad_a W_ab)
+    force_code: str
 
     def terms(self):
         return [Term("pressureGradient", ("rates",), init=self.init_code,
-                     pair=self.pair_code, reads=("gradW",), writes=("acc",),
-                     reaction=self.reaction_code)]
+                     force=self.force_code, reads=("gradW",), writes=("acc",))]
 
 
 @register
@@ -63,17 +61,11 @@ class Symmetric(Momentum):
     name = "symmetric"
     doc = "dv_a/dt = -sum_b m_b (p_a/rho_a^2 + p_b/rho_b^2) grad_a W_ab, T(3.24), T(3.26)"
     init_code = "pa_rho2 = pa / (rhoa * rhoa)"
-    pair_code = ("pterm = mb * (pa_rho2 + pb / (rhob * rhob))\n"
-                 "acc_@ -= pterm * gW@")
-    reaction_code = ("pterm_b = ma * (pb / (rhob * rhob) + pa_rho2)\n"
-                     "acc_b_@ += pterm_b * gW@")
+    force_code = "pa_rho2 + pb / (rhob * rhob)"
 
 
 @register
 class ColagrossiLandrini(Momentum):
     name = "colagrossiLandrini"
     doc = "dv_a/dt = -sum_b m_b (p_a + p_b)/(rho_a rho_b) grad_a W_ab, T(3.25)"
-    pair_code = ("pterm = mb * (pa + pb) / (rhoa * rhob)\n"
-                 "acc_@ -= pterm * gW@")
-    reaction_code = ("pterm_b = ma * (pb + pa) / (rhob * rhoa)\n"
-                     "acc_b_@ += pterm_b * gW@")
+    force_code = "(pa + pb) / (rhoa * rhob)"

@@ -26,8 +26,14 @@ class Viscosity(PipelineModel):
     reads: tuple[str, ...] = ("gradW",)
     #: the term of the pair (b, a), added to acc_b_@ ("" = the gather only)
     reaction_code: str = ""
+    #: instead of pair and reaction code: a symmetric pair coefficient Pi_ab (= Pi_ba) with
+    #: dv_a/dt -= m_b Pi_ab grad_a W_ab (``Term.force``)
+    force_code: str = ""
 
     def terms(self):
+        if self.force_code:
+            return [Term("viscosity", ("rates",), init=self.init_code, force=self.force_code,
+                         sees=VISCOUS_SEES, reads=self.reads, writes=("acc",))]
         if not self.pair_code:
             return []
         return [Term("viscosity", ("rates",), init=self.init_code, pair=self.pair_code,
@@ -60,13 +66,8 @@ class Artificial(Viscosity):
 
     # min(vdotr, 0) instead of a branch: receding pairs add an exact 0.0 (the same sums),
     # and the loop has no data-dependent branch to mispredict (about half the pairs of a
-    # flow with pressure waves approach)
-    pair_code = ("pi_ab = -visc_alpha * h * (ca + cb) / (rhoa + rhob) * min(vdotr, 0.0) / (r2 + eta2)\n"
-                 "acc_@ -= mb * pi_ab * gW@")
-    # Pi_ba = Pi_ab (v_ba . r_ba = v_ab . r_ab), grad_b W_ba = -grad_a W_ab; written as Pi_ab
-    # is, so that the compiler computes it once for both particles
-    reaction_code = ("pi_ba = -visc_alpha * h * (ca + cb) / (rhoa + rhob) * min(vdotr, 0.0) / (r2 + eta2)\n"
-                     "acc_b_@ += ma * pi_ba * gW@")
+    # flow with pressure waves approach). Pi_ba = Pi_ab (v_ba . r_ba = v_ab . r_ab)
+    force_code = "-visc_alpha * h * (ca + cb) / (rhoa + rhob) * min(vdotr, 0.0) / (r2 + eta2)"
 
 
 @register
