@@ -173,11 +173,16 @@ cx_lo = max(ix - 1, 0)
 cx_hi = min(ix + 2, ncx)
 for cy0 in range({ylo}, {yhi}):
     row = {cy} * ncx
-    for b in range(cell_start[row + cx_lo], cell_start[row + cx_hi]):
-        dx_ab = xa - x[b]
-        dy_ab = ya - y[b]
+    lo = cell_start[row + cx_lo]
+    hi = cell_start[row + cx_hi]
+    xs = x[lo:hi]
+    ys = y[lo:hi]
+    for j in range(hi - lo):
+        b = lo + j
+        dx_ab = xa - xs[j]
+        dy_ab = ya - ys[j]
 {wrap}        r2 = dx_ab * dx_ab + dy_ab * dy_ab
-        ok = (r2 < reach2) & (b != a)
+        ok = (r2 < reach2){notself}
 {body}
 """
 
@@ -462,16 +467,26 @@ class Assembly:
                      "    dy_ab += ly\n")
         return wrap
 
-    def cell_walk(self, body: str, rows: str | None = None) -> str:
+    def counts_self(self) -> bool:
+        """The count pass's row walk counts particle a itself (once: the rows are distinct
+        where y is not periodic) and the caller subtracts it: without the test b != a per
+        candidate the compiler vectorises the count (3.4 against 12.6 ms at 89 k
+        particles, one thread, issue 12)."""
+        return not self.sel.periodic_x and not self.sel.periodic_y
+
+    def cell_walk(self, body: str, rows: str | None = None, count: bool = False) -> str:
         """The 3 x 3 cell gather around particle ``a`` (within ``reach2``), for the list:
         ``body`` for each b within reach, or, where x is not periodic, ``rows`` for every
-        candidate of the three row ranges, with ``ok`` true for those within reach."""
+        candidate of the three row ranges (contiguous slices of the sorted particles), with
+        ``ok`` true for those within reach (and, for ``count`` where ``counts_self``, for a
+        itself)."""
         sel = self.sel
         if rows is not None and not sel.periodic_x:
             ylo, yhi, cy = (("iy - 1", "iy + 2", "(cy0 % ncy)") if sel.periodic_y
                             else ("max(iy - 1, 0)", "min(iy + 2, ncy)", "cy0"))
             wrap = self._wrap()
-            return _CELLS_ROWS.format(ylo=ylo, yhi=yhi, cy=cy,
+            notself = "" if count and self.counts_self() else " & (b != a)"
+            return _CELLS_ROWS.format(ylo=ylo, yhi=yhi, cy=cy, notself=notself,
                                       wrap=_block(wrap, 8) + ("\n" if wrap else ""),
                                       body=_block(rows, 8))
 
@@ -749,8 +764,8 @@ def count_neighbours(x, y, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2, 
         xa = x[a]
         ya = y[a]
         n_a = 0
-{_block(asm.cell_walk("n_a += 1", "n_a += ok"), 8)}
-        count[a] = n_a
+{_block(asm.cell_walk("n_a += 1", "n_a += ok", count=True), 8)}
+        count[a] = n_a{" - 1" if asm.counts_self() else ""}
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
