@@ -43,36 +43,51 @@ def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
     return outside
 
 
-@njit(cache=True)   # no fastmath: a NaN position must not pass for a small displacement
+#: the particle ranges the whole-state reductions split into (a fixed number, so that what
+#: each range holds does not depend on the thread count; max and min are exact anyway)
+REDUCTION_CHUNKS = 64
+
+
+@njit(parallel=True, cache=True)   # no fastmath: a NaN position must not pass for a small displacement
 def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly):
     """(largest displacement^2 since (xr, yr), largest speed^2, a particle outside the box
     [x0, x1) x [y0, y1) or not finite). On a periodic axis (``lx``/``ly`` > 0, the period)
     positions are wrapped into the box as binning does and displacements are taken to the
     nearest image, so crossing the period is no reason to rebuild the list (its pairs use the
-    nearest image too)."""
-    d2max = 0.0
-    v2max = 0.0
-    out = False
-    for a in range(x.shape[0]):
-        if lx > 0.0:
-            x[a] = x0 + (x[a] - x0) % lx
-        if ly > 0.0:
-            y[a] = y0 + (y[a] - y0) % ly
-        dx = x[a] - xr[a]
-        dy = y[a] - yr[a]
-        if lx > 0.0:
-            dx -= lx * np.floor(dx / lx + 0.5)
-        if ly > 0.0:
-            dy -= ly * np.floor(dy / ly + 0.5)
-        d2 = dx * dx + dy * dy
-        if not d2 <= d2max:
-            d2max = d2 if d2 == d2 else np.inf
-        s2 = u[a] * u[a] + v[a] * v[a]
-        if not s2 <= v2max:
-            v2max = s2 if s2 == s2 else np.inf
-        if not (x[a] >= x0 and x[a] < x1 and y[a] >= y0 and y[a] < y1):
-            out = True
-    return d2max, v2max, out
+    nearest image too). A NaN counts as an infinite displacement or speed. Parallel over
+    ``REDUCTION_CHUNKS`` ranges of particles, then the maxima of the ranges."""
+    n = x.shape[0]
+    nc = REDUCTION_CHUNKS
+    d2c = np.zeros(nc)
+    v2c = np.zeros(nc)
+    outc = np.zeros(nc, dtype=np.bool_)
+    for ci in prange(nc):
+        d2max = 0.0
+        v2max = 0.0
+        out = False
+        for a in range(ci * n // nc, (ci + 1) * n // nc):
+            if lx > 0.0:
+                x[a] = x0 + (x[a] - x0) % lx
+            if ly > 0.0:
+                y[a] = y0 + (y[a] - y0) % ly
+            dx = x[a] - xr[a]
+            dy = y[a] - yr[a]
+            if lx > 0.0:
+                dx -= lx * np.floor(dx / lx + 0.5)
+            if ly > 0.0:
+                dy -= ly * np.floor(dy / ly + 0.5)
+            d2 = dx * dx + dy * dy
+            if not d2 <= d2max:
+                d2max = d2 if d2 == d2 else np.inf
+            s2 = u[a] * u[a] + v[a] * v[a]
+            if not s2 <= v2max:
+                v2max = s2 if s2 == s2 else np.inf
+            if not (x[a] >= x0 and x[a] < x1 and y[a] >= y0 and y[a] < y1):
+                out = True
+        d2c[ci] = d2max
+        v2c[ci] = v2max
+        outc[ci] = out
+    return d2c.max(), v2c.max(), outc.any()
 
 
 @njit(**_JIT)

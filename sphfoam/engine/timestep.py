@@ -4,24 +4,43 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+import numpy as np
+from numba import njit, prange
+
+from sphfoam.engine.neighbours import REDUCTION_CHUNKS
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, parallel=True)
 def stable_time_step(h, c, sigma, ax, ay, kind, beta, force_condition):
     """beta * min over fluid particles of h / (c_a + sigma_a), T(3.88)-(3.89), and, when
-    ``force_condition``, of sqrt(h / |F_a|), T(3.90). Returns +inf for an empty set."""
+    ``force_condition``, of sqrt(h / |F_a|), T(3.90). Returns +inf for an empty set.
+    Parallel over ``REDUCTION_CHUNKS`` ranges of particles (min and max are exact, so the
+    result does not depend on the thread count)."""
+    n = c.shape[0]
+    nc = REDUCTION_CHUNKS
+    dtc = np.full(nc, math.inf)
+    fc = np.zeros(nc)
+    for ci in prange(nc):
+        dt = math.inf
+        fmax = 0.0
+        for a in range(ci * n // nc, (ci + 1) * n // nc):
+            if kind[a] != 0:
+                continue
+            d = h / (c[a] + sigma[a])
+            if d < dt:
+                dt = d
+            f2 = ax[a] * ax[a] + ay[a] * ay[a]
+            if f2 > fmax:
+                fmax = f2
+        dtc[ci] = dt
+        fc[ci] = fmax
     dt = math.inf
     fmax = 0.0
-    for a in range(c.shape[0]):
-        if kind[a] != 0:
-            continue
-        d = h / (c[a] + sigma[a])
-        if d < dt:
-            dt = d
-        f2 = ax[a] * ax[a] + ay[a] * ay[a]
-        if f2 > fmax:
-            fmax = f2
+    for ci in range(nc):
+        if dtc[ci] < dt:
+            dt = dtc[ci]
+        if fc[ci] > fmax:
+            fmax = fc[ci]
     if force_condition and fmax > 0.0:
         df = math.sqrt(h / math.sqrt(fmax))
         if df < dt:
