@@ -423,6 +423,38 @@ def parallel_launch_us(threads, calls=200):
     return 1e6 * float(np.median(ts))
 
 
+_speed_fn = None
+
+
+def speed_probe_ms(repeats=7):
+    """Median time (ms) of a fixed serial numba loop of scalar arithmetic (a sqrt, a
+    division and a few products per iteration, as a pair loop has): the speed the machine
+    gives one thread just now. On the shared development VM the same loop took 3.8 to 17 ms
+    within a minute (issue 12, fourth session), so a configuration whose probe reads well
+    above the run's smallest ran on a slowed machine: compare rates at equal probe."""
+    global _speed_fn
+    import numba
+    import numpy as np
+
+    if _speed_fn is None:
+        @numba.njit(cache=False)
+        def probe(n):
+            s = 0.0
+            x = 1.0
+            for i in range(n):
+                x = x * 1.0000001 + 1e-9
+                s += math.sqrt(x) / (x + 1.0) * 0.5
+            return s
+        _speed_fn = probe
+        _speed_fn(10)
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        _speed_fn(1_000_000)
+        ts.append(time.perf_counter() - t0)
+    return 1e3 * float(np.median(ts))
+
+
 # --- timing ------------------------------------------------------------------------------
 def timed_steps(sim, seconds, min_steps=5):
     times = []
@@ -525,6 +557,7 @@ def bench_config(total, threads, args, steps=None):
 
     busy_before = wait_idle(args.wait_idle) if args.wait_idle > 0 else cpu_busy()
     launch_us = parallel_launch_us(threads)
+    probe_before = speed_probe_ms()
     numba.set_num_threads(threads)
     sim, info = make_sim(total)
     fe = sim.integrator.force_evaluations_per_step
@@ -540,6 +573,7 @@ def bench_config(total, threads, args, steps=None):
     el = float(sum(times))
     n = info["n"]
     pairs = 0.5 * (ns0["pairs"] + ns1["pairs"])
+    probe_after = speed_probe_ms()
     stages = stage_breakdown(sim, args.stage_seconds)
     ms_rates = stages["stages"]["rates"]["ms_per_call"]
     ms_drate = stages["stages"]["density_rate"]["ms_per_call"]
@@ -567,6 +601,8 @@ def bench_config(total, threads, args, steps=None):
         removed=int(sum(r.count for r in sim.removals)),
         machine_busy_before=busy_before,       # all CPUs, any process, before the config
         parallel_launch_us=launch_us,          # empty prange region at this thread count
+        # the machine's serial speed just before and after the timed window (speed_probe_ms)
+        speed_probe_ms=(probe_before, probe_after),
         cpu_utilisation=cpu_util,              # process CPU time / (wall x threads), timed
         loadavg_after=os.getloadavg()[0],
     )
@@ -655,6 +691,8 @@ THROUGHPUT_COLS = [
     ("speedup", lambda r: f"{r.get('speedup', 1.0):.2f}"),
     ("drift", lambda r: f"{r['drift']:.2f}"),
     ("launch (us)", lambda r: f"{r['parallel_launch_us']:.0f}"),
+    ("probe (ms)", lambda r: "/".join(f"{v:.1f}" for v in r["speed_probe_ms"])
+     if "speed_probe_ms" in r else "-"),
     ("cpu util", lambda r: f"{100 * r['cpu_utilisation']:.0f}%"),
     ("busy before", lambda r: f"{100 * r['machine_busy_before']:.0f}%"),
 ]
@@ -756,7 +794,11 @@ def write_markdown(results, path: Path):
               "quarter (the pair loops get dearer as the flow develops). launch = median wall time of an empty numba prange region at "
               "that thread count (a few us on an idle machine; milliseconds when another "
               "process holds a core); cpu util = process CPU time / (wall x threads) in the "
-              "timed window; busy before = all-CPU load just before the configuration.",
+              "timed window; busy before = all-CPU load just before the configuration; "
+              "probe = the median time of a fixed serial loop of scalar arithmetic just "
+              "before / after the timed window (speed_probe_ms: the speed the machine gives "
+              "one thread; it varies by 2x and more on a shared VM, so compare rows at equal "
+              "probe).",
               "",
               markdown_table([c[0] for c in THROUGHPUT_COLS],
                              [[f(r) for _, f in THROUGHPUT_COLS] for r in results["runs"]]),
