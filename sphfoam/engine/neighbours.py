@@ -49,18 +49,19 @@ REDUCTION_CHUNKS = 64
 
 
 @njit(parallel=True, cache=True)   # no fastmath: a NaN position must not pass for a small displacement
-def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly):
+def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly, scratch):
     """(largest displacement^2 since (xr, yr), largest speed^2, a particle outside the box
     [x0, x1) x [y0, y1) or not finite). On a periodic axis (``lx``/``ly`` > 0, the period)
     positions are wrapped into the box as binning does and displacements are taken to the
     nearest image, so crossing the period is no reason to rebuild the list (its pairs use the
     nearest image too). A NaN counts as an infinite displacement or speed. Parallel over
-    ``REDUCTION_CHUNKS`` ranges of particles, then the maxima of the ranges."""
+    ``REDUCTION_CHUNKS`` ranges of particles, then the maxima of the ranges; ``scratch``: a
+    (3, REDUCTION_CHUNKS) float array the caller keeps (no allocation per step)."""
     n = x.shape[0]
     nc = REDUCTION_CHUNKS
-    d2c = np.zeros(nc)
-    v2c = np.zeros(nc)
-    outc = np.zeros(nc, dtype=np.bool_)
+    d2c = scratch[0]
+    v2c = scratch[1]
+    outc = scratch[2]
     for ci in prange(nc):
         d2max = 0.0
         v2max = 0.0
@@ -86,8 +87,8 @@ def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly):
                 out = True
         d2c[ci] = d2max
         v2c[ci] = v2max
-        outc[ci] = out
-    return d2c.max(), v2c.max(), outc.any()
+        outc[ci] = 1.0 if out else 0.0
+    return d2c.max(), v2c.max(), outc.max() > 0.0
 
 
 @njit(**_JIT)

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, prange
 
-from sphfoam.engine.neighbours import CellList, displacement_check, permute
+from sphfoam.engine.neighbours import REDUCTION_CHUNKS, CellList, displacement_check, permute
 from sphfoam.engine.state import FLUID, ParticleState
-from sphfoam.engine.timestep import stable_time_step
+from sphfoam.engine.timestep import stable_time_step_into
 
 
 @njit(parallel=True, cache=True)
@@ -103,6 +103,8 @@ class Simulation:
         self.half_lists = True
         #: the current list's array for the half-list loops (``Pipeline.half_lists``), or None
         self._half = None
+        #: per-range partial results of the whole-state reductions (no allocation per step)
+        self._reduce = np.empty((3, REDUCTION_CHUNKS))
         #: positions at the last build of the list (None: rebuild at the next step)
         self._ref = None
         self.list_built = 0
@@ -178,7 +180,7 @@ class Simulation:
         x1 = cl.x0 + cl.ncx * cl.cell_size
         y1 = cl.y0 + cl.ncy * cl.cell_size
         d2, v2, out = displacement_check(st.x, st.y, ref[0], ref[1], st.u, st.v, cl.x0, cl.y0,
-                                         x1, y1, cl.lx, cl.ly)
+                                         x1, y1, cl.lx, cl.ly, self._reduce)
         if out:
             return False
         reach = math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt
@@ -297,8 +299,8 @@ class Simulation:
         if not self.adjust_time_step:
             return self.delta_t
         st = self.state
-        dt = stable_time_step(self.h, st.c, st.sigma, st.ax, st.ay, st.kind, self.beta,
-                              self.force_condition)
+        dt = stable_time_step_into(self.h, st.c, st.sigma, st.ax, st.ay, st.kind, self.beta,
+                                   self.force_condition, self._reduce[:2])
         return min(dt, self.max_delta_t, self.model_dt_limit)
 
     # --- stepping ------------------------------------------------------------------------

@@ -10,16 +10,23 @@ from numba import njit, prange
 from sphfoam.engine.neighbours import REDUCTION_CHUNKS
 
 
-@njit(cache=True, fastmath=False, parallel=True)
 def stable_time_step(h, c, sigma, ax, ay, kind, beta, force_condition):
+    """:func:`stable_time_step_into` with scratch of its own."""
+    return stable_time_step_into(h, c, sigma, ax, ay, kind, beta, force_condition,
+                                 np.empty((2, REDUCTION_CHUNKS)))
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def stable_time_step_into(h, c, sigma, ax, ay, kind, beta, force_condition, scratch):
     """beta * min over fluid particles of h / (c_a + sigma_a), T(3.88)-(3.89), and, when
     ``force_condition``, of sqrt(h / |F_a|), T(3.90). Returns +inf for an empty set.
     Parallel over ``REDUCTION_CHUNKS`` ranges of particles (min and max are exact, so the
-    result does not depend on the thread count)."""
+    result does not depend on the thread count). ``scratch``: a (2, REDUCTION_CHUNKS) float
+    array the caller keeps, so that a step allocates nothing."""
     n = c.shape[0]
     nc = REDUCTION_CHUNKS
-    dtc = np.full(nc, math.inf)
-    fc = np.zeros(nc)
+    dtc = scratch[0]
+    fc = scratch[1]
     for ci in prange(nc):
         dt = math.inf
         fmax = 0.0
