@@ -135,3 +135,22 @@ def test_initial_wave_columns_keep_their_bottom_particle(tutorial, boundary):
     # the fluid's volume is the exact wave's (the columns' heights)
     np.testing.assert_allclose((st.m[f] / st.rho[f]).sum(), dx * (d + eta).sum(),
                                rtol=1e-9)
+
+
+@pytest.mark.parametrize("dx", [0.4166667, 0.41666667])
+@pytest.mark.parametrize("boundary", ["mirrorGhosts", "stationaryGhosts"])
+def test_a_rounded_dx_fills_the_tank_to_the_far_wall(tutorial, dx, boundary):
+    """A dx typed with 7-8 digits (10/24 m as 0.4166667) makes P's 250 m tank 599.99995
+    spacings long; the lattice used to floor that to 599 columns and leave a column-wide gap
+    at the far wall (x = 100 m) that the water fell into, sloshing at 3 m/s within a second.
+    Every column from the near to the far wall is there, dx apart."""
+    case = tutorial("solitaryWallRunup", {"system/particleDict:dx": dx,
+                                          "constant/sphProperties:boundary":
+                                          {"type": boundary}})
+    st = setup_case(Case(case), log=lambda m: None)
+    f = st.kind == 0
+    cols = np.unique(np.round(st.x[f], 5))
+    assert cols.size == 600
+    assert cols[0] - (-150.0) == pytest.approx(0.5 * dx, rel=1e-3)
+    assert 100.0 - cols[-1] == pytest.approx(0.5 * dx, rel=1e-3)
+    np.testing.assert_allclose(np.diff(cols), dx, rtol=1e-4)   # cols rounded to 1e-5 m

@@ -18,6 +18,16 @@ import numpy as np
 
 from sphfoam.case.schemas import BoxWalls, MeshWalls, ParticleDict, SlopeWalls
 
+#: how far short of a whole number of spacings (in spacings) a length may fall and still get
+#: its last particle: a dx typed with a few digits (0.4166667 for d/24) makes a 200 m box
+#: 479.99995 spacings long, and flooring that left a column-wide gap at the far wall
+LATTICE_TOLERANCE = 1e-3
+
+
+def lattice_count(length: float, dx: float) -> int:
+    """Number of whole dx-spacings in ``length`` (within ``LATTICE_TOLERANCE`` of one)."""
+    return max(0, int(math.floor(length / dx + LATTICE_TOLERANCE)))
+
 
 @dataclass(frozen=True)
 class Segment:

@@ -17,7 +17,8 @@ from scipy.spatial import cKDTree
 from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models.mirror import line_distance, segment_array
-from sphfoam.setup.geometry import (distance_to_walls, fluid_side, lattice_offsets,
+from sphfoam.setup.geometry import (LATTICE_TOLERANCE, distance_to_walls, fluid_side,
+                                    lattice_count, lattice_offsets,
                                     polylines_of, segments_of, wall_metadata)
 from sphfoam.setup.waves import fields as wave_fields
 from sphfoam.setup.waves import surface as wave_surface
@@ -26,8 +27,8 @@ from sphfoam.setup.waves import wave_columns
 
 def _lattice(lo, hi, dx):
     """Cell centres of the dx-lattice anchored at ``lo`` that lie inside [lo, hi]."""
-    nx = int(np.floor((hi[0] - lo[0]) / dx + 1e-9))
-    ny = int(np.floor((hi[1] - lo[1]) / dx + 1e-9))
+    nx = lattice_count(hi[0] - lo[0], dx)
+    ny = lattice_count(hi[1] - lo[1], dx)
     xs = lo[0] + dx * (np.arange(nx) + 0.5)
     ys = lo[1] + dx * (np.arange(ny) + 0.5)
     X, Y = np.meshgrid(xs, ys)
@@ -207,7 +208,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     if xw.size and xf.size:
         # fluid never overlaps walls: drop fluid particles closer than dx/2 to a wall particle
         d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]))
-        ok = d >= 0.5 * dx
+        ok = d >= 0.5 * dx * (1 - LATTICE_TOLERANCE)
         xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     if segs and xf.size:
         # ... or to a wall line (walls without particles, e.g. mirrored ghosts). A wave's
@@ -219,7 +220,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         # "breathed" by 8-9 % at the column's acoustic period (docs/low-dissipation.md).
         # Each particle keeps half its own spacing, min(dx, dy), from the wall lines instead
         # (the wall rows of particle boundaries lie dx/2 behind the line: no change there).
-        ok = distance_to_walls(segs, xf, yf) >= 0.5 * np.minimum(dx, dyf) * (1 - 1e-6)
+        ok = distance_to_walls(segs, xf, yf) >= 0.5 * np.minimum(dx, dyf) * (1 - LATTICE_TOLERANCE)
         xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     if xf.size == 0:
         raise ValueError("system/particleDict: fluid regions produce no particles at this dx")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from sphfoam.case.schemas import BoxRegion
+from sphfoam.setup.geometry import lattice_count
 
 
 def wave_columns(region: BoxRegion, dx: float, waves, g: float):
@@ -18,7 +19,7 @@ def wave_columns(region: BoxRegion, dx: float, waves, g: float):
     """
     (x0, bed), (x1, top) = region.min, region.max
     d = top - bed
-    nx = int(np.floor((x1 - x0) / dx + 1e-9))
+    nx = lattice_count(x1 - x0, dx)
     xc = x0 + dx * (np.arange(nx) + 0.5)
     eta = surface(xc, d, waves, g)
     n = np.maximum(1, np.round((d + eta) / dx).astype(int))
