@@ -406,13 +406,37 @@ def executor(jobs: int, threads: int, scheduler: str | None = None) -> Executor:
     old = os.environ.get("NUMBA_NUM_THREADS")
     os.environ["NUMBA_NUM_THREADS"] = str(threads)
     try:
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn")) as ex:
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
+                                 initializer=follow_parent, initargs=(os.getpid(),)) as ex:
             yield ex
     finally:
         if old is None:
             os.environ.pop("NUMBA_NUM_THREADS", None)
         else:
             os.environ["NUMBA_NUM_THREADS"] = old
+
+
+#: seconds a worker whose study has gone gives its run to finish the step and write (then it
+#: idles, its result having nowhere to go) before it quits
+ORPHAN_GRACE = 60.0
+
+
+def follow_parent(parent: int, poll: float = 1.0, grace: float = ORPHAN_GRACE) -> None:
+    """Worker initialiser: when the study process goes (killed, or its terminal closed), stop
+    this worker's run as Ctrl-C does (the time loop finishes its step and writes the state,
+    so ``sphfoam study`` resumes it from there), then quit; without it the runs went on
+    computing, orphaned, for as long as they had left."""
+    import signal
+    import threading
+
+    def watch():
+        while os.getppid() == parent:
+            wallclock.sleep(poll)
+        os.kill(os.getpid(), signal.SIGINT)
+        wallclock.sleep(grace)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="sphfoam-follow-parent", daemon=True).start()
 
 
 def run_study(study: Study, *, jobs: int | None = None, scheduler: str | None = None,

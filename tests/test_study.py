@@ -196,3 +196,67 @@ def test_dask_cluster_runs_the_same_code_path(flume, tmp_path):
     row = json.loads((tmp_path / "dask" / "one_dx0.1" / "result.json").read_text())
     assert row["outcome"] == "ok" and row["steps"] > 0
     assert math.isfinite(row["H1"])
+
+
+def _orphan_sleeper(folder):
+    """A stand-in for a run: sleeps until Ctrl-C (SIGINT), then records that it stopped."""
+    import os
+    import time
+    Path(folder, "worker.pid").write_text(str(os.getpid()))
+    try:
+        time.sleep(120)
+    except KeyboardInterrupt:
+        Path(folder, "stopped").write_text("interrupted")
+
+
+def _orphaned_study(folder):
+    """A stand-in for `sphfoam study`: the same pool as study.executor, one long run."""
+    import multiprocessing as mp
+    import os
+    import time
+    from concurrent.futures import ProcessPoolExecutor
+
+    from sphfoam.study import follow_parent
+    ex = ProcessPoolExecutor(1, mp_context=mp.get_context("spawn"), initializer=follow_parent,
+                             initargs=(os.getpid(), 0.1, 10.0))
+    ex.submit(_orphan_sleeper, folder)
+    time.sleep(120)
+
+
+def test_a_killed_study_stops_its_runs(tmp_path):
+    """Killing the study process (SIGKILL: no handler runs) stops its workers' runs as Ctrl-C
+    does, within a second; before, they went on computing, orphaned, to their end time."""
+    import multiprocessing as mp
+    import os
+    import signal
+    import time
+
+    parent = mp.get_context("spawn").Process(target=_orphaned_study, args=(str(tmp_path),))
+    parent.start()
+    pid_file = tmp_path / "worker.pid"
+    t0 = time.time()
+    while not pid_file.is_file() and time.time() - t0 < 60:
+        time.sleep(0.05)
+    assert pid_file.is_file(), "the worker never started"
+    worker = int(pid_file.read_text())
+    os.kill(parent.pid, signal.SIGKILL)
+    parent.join()
+    t0 = time.time()
+    while not (tmp_path / "stopped").is_file() and time.time() - t0 < 10:
+        time.sleep(0.05)
+    assert (tmp_path / "stopped").read_text() == "interrupted"
+
+    def running():
+        # a quit worker may linger as a zombie (no one reaps an orphan in a container)
+        try:
+            status = Path(f"/proc/{worker}/status").read_text()
+        except OSError:
+            return False
+        return "\nState:\tZ" not in status
+
+    t0 = time.time()
+    while running() and time.time() - t0 < 20:
+        time.sleep(0.05)
+    if running():
+        os.kill(worker, signal.SIGKILL)
+        raise AssertionError("the orphaned worker did not quit")
