@@ -223,6 +223,7 @@ def _orphaned_study(folder):
     time.sleep(120)
 
 
+@pytest.mark.skipif(not Path("/proc/self/status").is_file(), reason="reads /proc (Linux)")
 def test_a_killed_study_stops_its_runs(tmp_path):
     """Killing the study process (SIGKILL: no handler runs) stops its workers' runs as Ctrl-C
     does, within a second; before, they went on computing, orphaned, to their end time."""
