@@ -220,7 +220,8 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         # "breathed" by 8-9 % at the column's acoustic period (docs/low-dissipation.md).
         # Each particle keeps half its own spacing, min(dx, dy), from the wall lines instead
         # (the wall rows of particle boundaries lie dx/2 behind the line: no change there).
-        ok = distance_to_walls(segs, xf, yf) >= 0.5 * np.minimum(dx, dyf) * (1 - LATTICE_TOLERANCE)
+        ok = (distance_to_walls(segs, xf, yf)
+              >= 0.5 * np.minimum(dx, dyf) * (1 - LATTICE_TOLERANCE))
         xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     if xf.size == 0:
         raise ValueError("system/particleDict: fluid regions produce no particles at this dx")
