@@ -423,9 +423,10 @@ ORPHAN_GRACE = 60.0
 
 def follow_parent(parent: int, poll: float = 1.0, grace: float = ORPHAN_GRACE) -> None:
     """Worker initialiser: when the study process goes (killed, or its terminal closed), stop
-    this worker's run as Ctrl-C does (the time loop finishes its step and writes the state,
-    so ``sphfoam study`` resumes it from there), then quit; without it the runs went on
-    computing, orphaned, for as long as they had left."""
+    this worker's run as Ctrl-C does (the time loop finishes its step and writes the state;
+    the run gets no result, so the study started again runs it again, from there with
+    ``startFrom latestTime``), then quit; without it the runs went on computing, orphaned,
+    for as long as they had left."""
     import signal
     import threading
 
