@@ -430,6 +430,10 @@ def follow_parent(parent: int, poll: float = 1.0, grace: float = ORPHAN_GRACE) -
     import signal
     import threading
 
+    # a study started in the background (nohup, `&` in a script) hands its workers SIGINT
+    # ignored, and Python then keeps ignoring it: Ctrl-C's KeyboardInterrupt back on
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
     def watch():
         while os.getppid() == parent:
             wallclock.sleep(poll)

@@ -213,10 +213,13 @@ def _orphaned_study(folder):
     """A stand-in for `sphfoam study`: the same pool as study.executor, one long run."""
     import multiprocessing as mp
     import os
+    import signal
     import time
     from concurrent.futures import ProcessPoolExecutor
 
     from sphfoam.study import follow_parent
+    # as started in the background (nohup, `&`): SIGINT ignored, inherited by the workers
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     ex = ProcessPoolExecutor(1, mp_context=mp.get_context("spawn"), initializer=follow_parent,
                              initargs=(os.getpid(), 0.1, 10.0))
     ex.submit(_orphan_sleeper, folder)
@@ -226,7 +229,9 @@ def _orphaned_study(folder):
 @pytest.mark.skipif(not Path("/proc/self/status").is_file(), reason="reads /proc (Linux)")
 def test_a_killed_study_stops_its_runs(tmp_path):
     """Killing the study process (SIGKILL: no handler runs) stops its workers' runs as Ctrl-C
-    does, within a second; before, they went on computing, orphaned, to their end time."""
+    does, within a second; before, they went on computing, orphaned, to their end time. It
+    holds for a study started in the background (SIGINT inherited as ignored), as the
+    stand-in study here is."""
     import multiprocessing as mp
     import os
     import signal
