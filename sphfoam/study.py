@@ -19,6 +19,7 @@ import itertools
 import json
 import math
 import os
+import shutil
 import time as wallclock
 import traceback
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
@@ -30,6 +31,7 @@ from typing import Any
 from pydantic import Field, ValidationError, field_validator
 
 from sphfoam.case import foamdict
+from sphfoam.case.edit import RESULTS
 from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
 from sphfoam.case.paths import check_name, inside
 from sphfoam.case.schemas import SPH_FAMILIES, Strict
@@ -273,9 +275,12 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
     return study
 
 
-def prepare(study: Study, rerun: bool = False) -> list[RunSpec]:
+def prepare(study: Study, rerun: bool = False, log=print) -> list[RunSpec]:
     """Clone the base case for every run without a result yet and validate every clone
-    (all problems on one screen before anything runs). Returns the runs still to do."""
+    (all problems on one screen before anything runs). A run a stopped study left with
+    written times continues from the last of them (``startFrom latestTime``) when its
+    dictionaries are still what the study makes of it, and is kept aside as ``<run>.old``
+    otherwise (``rerun``: every run starts again). Returns the runs still to do."""
     from sphfoam.case.case import Case
     from sphfoam.case.edit import clone_case
     from sphfoam.setup.sanity import check_geometry
@@ -291,6 +296,19 @@ def prepare(study: Study, rerun: bool = False) -> list[RunSpec]:
                                    f"a plain folder directly inside the study {study.root}")
         if not rerun and (path / RESULT).is_file():
             continue
+        if not rerun and _has_times(path):
+            # an interrupted run (its study was stopped): continue it from its last written
+            # time when it is still the same case; a run of another definition is kept aside
+            fresh = clone_case(study.base, path.with_name(f".{path.name}.clone"),
+                               study.edits[run.name], ignore=_inside(study))
+            if _same_dictionaries(fresh, path):
+                shutil.rmtree(fresh)
+                todo.append(run)
+                continue
+            shutil.rmtree(fresh)
+            kept = _aside(path)
+            log(f"study: {run.name} was begun with other settings; its results are kept "
+                f"in {kept} and it starts again")
         clone_case(study.base, path, study.edits[run.name], ignore=_inside(study))
         try:
             c = Case(path)
@@ -303,6 +321,52 @@ def prepare(study: Study, rerun: bool = False) -> list[RunSpec]:
     if problems:
         raise CaseError(problems)
     return todo
+
+
+def _latest_time(path: Path) -> float:
+    """The latest time after 0 a run folder holds particles of (an interrupted run's), else 0."""
+    from sphfoam.case.times import list_times
+    from sphfoam.io.fields import has_particles
+
+    return max([t for t, p in list_times(path) if t > 0.0 and has_particles(p)], default=0.0)
+
+
+def _has_times(path: Path) -> bool:
+    """Whether a run folder holds a written time after 0 (an interrupted run's results)."""
+    return _latest_time(path) > 0.0
+
+
+def _case_files(path: Path) -> dict[str, Path]:
+    """The dictionaries of a case (what ``clone_case`` copies), by relative path."""
+    import fnmatch
+
+    out = {}
+    for f in path.rglob("*"):
+        rel = f.relative_to(path)
+        # 0/ is what the set-up makes of the dictionaries; the rest are results (matched at
+        # every level, as clone_case leaves them out)
+        if not f.is_file() or rel.parts[0] in ("0", RESULT) or \
+                any(fnmatch.fnmatch(part, pat) for part in rel.parts for pat in RESULTS):
+            continue
+        out[rel.as_posix()] = f
+    return out
+
+
+def _same_dictionaries(a: Path, b: Path) -> bool:
+    """Whether two case folders hold the same dictionaries, byte for byte."""
+    fa, fb = _case_files(a), _case_files(b)
+    return fa.keys() == fb.keys() and all(fa[k].read_bytes() == fb[k].read_bytes()
+                                          for k in fa)
+
+
+def _aside(path: Path) -> Path:
+    """Rename a run folder to the first free ``<name>.old``, ``<name>.old1``, ..."""
+    for i in itertools.count():
+        dst = path.with_name(f"{path.name}.old{i or ''}")
+        if not dst.exists():
+            path.rename(dst)
+            return dst
+    raise AssertionError("unreachable")
 
 
 def _inside(study: Study) -> tuple[str, ...]:
@@ -330,6 +394,10 @@ def run_one(spec: RunSpec) -> dict:
                            "description": spec.description, "dx": spec.dx}
     t0 = wallclock.perf_counter()
     report = None
+    resumed = _latest_time(path)
+    if resumed > 0.0:
+        # continued from a stopped study's last write: wall time and steps are this part's
+        row["resumedFrom"] = resumed
     try:
         case = Case(path)
         state = setup_case(case, log=lambda m: None)
@@ -447,7 +515,7 @@ def follow_parent(parent: int, poll: float = 1.0, grace: float = ORPHAN_GRACE) -
 def run_study(study: Study, *, jobs: int | None = None, scheduler: str | None = None,
               rerun: bool = False, log=print) -> list[dict]:
     """Run every run without a result, then collect the table, CSV and plot."""
-    todo = prepare(study, rerun=rerun)
+    todo = prepare(study, rerun=rerun, log=log)
     jobs = jobs or study.spec.jobs
     scheduler = scheduler or study.spec.scheduler
     done = len(study.runs) - len(todo)

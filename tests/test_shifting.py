@@ -177,6 +177,29 @@ def test_flat_free_surface_is_shifted_only_tangentially(dplus):
     assert dvf[tf].min() > 0.1 * np.abs(du).max()
 
 
+def test_free_surface_rows_below_free_surface_lambda_are_not_shifted(dplus):
+    """freeSurfaceLambda: a particle whose own lambda is below it (a flat surface's first
+    row, lambda about 0.5) keeps its place; every other particle gets the shift it gets
+    without the option (tangential near the surface, full inside)."""
+    x, y = lattice(rows=10, y0=0.5 * L)
+    rng = np.random.default_rng(4)
+    x = x + rng.uniform(-0.15, 0.15, x.size) * DX
+    y = y + rng.uniform(-0.05, 0.05, x.size) * DX
+    frozen = Box({"type": "deltaPlusShifting", "freeSurfaceLambda": 0.55})
+    sim_d, sim_f = dplus.sim(x, y), frozen.sim(x, y)
+    assert np.array_equal(sim_d.state.x, sim_f.state.x)          # the same order
+    lam = sim_f.aux[frozen.pipe.aux_index("shift_lambda")]
+    du_d, dv_d = dplus.shift(sim_d)
+    du_f, dv_f = frozen.shift(sim_f)
+    surface = lam < 0.55
+    top = sim_f.state.y > y.max() - 0.5 * DX
+    assert np.all(surface[top]) and surface.sum() < 0.4 * x.size
+    assert np.all(du_f[surface] == 0.0) and np.all(dv_f[surface] == 0.0)
+    assert np.abs(du_d[surface]).max() > 0.0                          # what it undoes
+    assert np.array_equal(du_f[~surface], du_d[~surface])
+    assert np.array_equal(dv_f[~surface], dv_d[~surface])
+
+
 def test_shifting_moves_positions_only_and_conserves_momentum(lind):
     x, y = perturbed(3)
     rng = np.random.default_rng(3)

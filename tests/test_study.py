@@ -178,6 +178,44 @@ def test_a_blow_up_is_a_row_with_its_diagnosis(flume, tmp_path):
     assert "Runs that did not finish" in md and "absurd_dx0.1" in md
 
 
+def test_a_stopped_run_continues_from_its_last_write(flume, tmp_path):
+    """A run whose study was stopped (written times, no result.json) continues from its last
+    written time, to the end and metrics of an uninterrupted run; one whose variant has
+    changed since is kept aside as <run>.old and starts again."""
+    body = f"""directory "{tmp_path / 'res'}";
+        resolutions (0.1);
+        set {{ endTime 2; writeInterval 0.5; }}
+        variants {{ one {{ maxCo @; }} }}
+        metrics {{ H1 {{ type waveHeight; function gauges; x 1; reference 0.15; }} }}"""
+    p = write_study(flume, body.replace("@", "0.25"))
+    (whole,) = st.run_study(st.load(p), log=lambda m: None)
+    assert whole["outcome"] == "ok" and "resumedFrom" not in whole
+    run = tmp_path / "res" / "one_dx0.1"
+    # what a stop after the write of t = 1 leaves: no result, the times after it gone
+    (run / "result.json").unlink()
+    for t in ("1.5", "2"):
+        shutil.rmtree(run / t)
+    said = []
+    (part,) = st.run_study(st.load(p), log=said.append)
+    assert "1 to run" in said[0]
+    assert part["outcome"] == "ok" and part["resumedFrom"] == 1.0, part
+    assert (run / "0.5").is_dir() and (run / "2").is_dir()
+    assert 0 < part["steps"] < whole["steps"]
+    # the step that writes t = 1 is where the restart takes over (monaghan2007 restarts bit
+    # for bit): the same end, the same metric
+    assert part["H1"] == pytest.approx(whole["H1"], rel=1e-9)
+    assert part["endTime"] == whole["endTime"]
+    # changed since: the old run is kept, the new one starts from 0
+    (run / "result.json").unlink()
+    shutil.rmtree(run / "2")
+    p = write_study(flume, body.replace("@", "0.2"))
+    (again,) = st.run_study(st.load(p), log=said.append)
+    assert "resumedFrom" not in again and again["outcome"] == "ok"
+    old = tmp_path / "res" / "one_dx0.1.old"
+    assert (old / "1.5").is_dir() and not (old / "2").exists()
+    assert any("kept in" in m and "one_dx0.1.old" in m for m in said)
+
+
 def test_dask_cluster_runs_the_same_code_path(flume, tmp_path):
     distributed = pytest.importorskip("distributed")
     p = write_study(flume, f"""directory "{tmp_path / 'dask'}";

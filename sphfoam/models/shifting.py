@@ -20,7 +20,10 @@ Both models share
 * the surface rule: a fluid particle with lambda_a < ``surfaceLambda`` (0.75, Marrone et al.'s
   bound of the interior) or with such a fluid neighbour is near the surface and keeps only the
   tangential part of its shift, delta_u - (delta_u . n_a) n_a (as Lind et al. 2012 do), so the
-  surface is not smeared outwards. Wall particles are never shifted.
+  surface is not smeared outwards. Wall particles are never shifted. With
+  ``freeSurfaceLambda`` > 0 a fluid particle whose own lambda_a is below it (the surface row
+  itself, the tip of a thin sheet) is not shifted at all; 0 (the default) leaves it to the
+  tangential rule.
 
 The shift moves positions only: the momentum and continuity equations use v, so linear momentum
 is unaffected (the Lagrangian re-meshing is an error of the order of the shift itself).
@@ -44,6 +47,11 @@ class _ShiftCoeffs(Coeffs):
         "a fluid particle whose lambda (smallest eigenvalue of sum grad W (x) r_ba V_b) or a "
         "fluid neighbour's is below this is near the free surface and is shifted only "
         "tangentially (0.75: Marrone et al. 2010's interior bound; 0: never)"))
+    freeSurfaceLambda: float = Field(0.0, ge=0.0, le=1.0, description=(
+        "a fluid particle whose own lambda is below this is on the free surface and is not "
+        "shifted at all (0, the default: it is shifted tangentially like the particles "
+        "next to it; 0.55 keeps a flat surface's first row, lambda ~ 0.5, and the tip of a "
+        "sheet in place)"))
 
 
 class ParticleShifting(PipelineModel):
@@ -116,6 +124,9 @@ if kind[a] == FLUID:
         shift_dn = shift_du * aux[I_shift_nx, a] + shift_dv * aux[I_shift_ny, a]
         shift_du -= shift_dn * aux[I_shift_nx, a]
         shift_dv -= shift_dn * aux[I_shift_ny, a]
+    if shift_lamf > 0.0 and aux[I_shift_lambda, a] < shift_lamf:
+        shift_du = 0.0
+        shift_dv = 0.0
     aux[I_shift_du, a] = shift_du
     aux[I_shift_dv, a] = shift_dv
 else:
@@ -129,6 +140,7 @@ else:
     def params(self, ctx: CaseContext):
         c = self.coeffs
         return {"shift_r": c.R, "shift_n": c.n, "shift_lam": c.surfaceLambda,
+                "shift_lamf": c.freeSurfaceLambda,
                 "shift_qdx": ctx.dx / ctx.h, **self.magnitude(ctx)}
 
     def magnitude(self, ctx: CaseContext) -> dict[str, float]:
