@@ -658,6 +658,12 @@ def markdown(rows: list[dict], metric_cols: list[str], study: Study) -> str:
                           else "")
                        + (f": {r['diagnosis']}" if r.get("diagnosis") else "")
                        + (f" (last good state: {r['lastGood']})" if r.get("lastGood") else ""))
+    resumed = [r for r in rows if r.get("resumedFrom")]
+    if resumed:
+        out += ["", "## Runs continued after a stop", "",
+                "Their steps, wall seconds and particle-steps/s are those of the part after "
+                "the restart.", ""]
+        out += [f"- **{r['run']}**: from t = {r['resumedFrom']:g} s" for r in resumed]
     return "\n".join(out) + "\n"
 
 

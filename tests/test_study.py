@@ -205,6 +205,8 @@ def test_a_stopped_run_continues_from_its_last_write(flume, tmp_path):
     # for bit): the same end, the same metric
     assert part["H1"] == pytest.approx(whole["H1"], rel=1e-9)
     assert part["endTime"] == whole["endTime"]
+    md = (tmp_path / "res" / "study.md").read_text()
+    assert "## Runs continued after a stop" in md and "**one_dx0.1**: from t = 1 s" in md
     # changed since: the old run is kept, the new one starts from 0
     (run / "result.json").unlink()
     shutil.rmtree(run / "2")
