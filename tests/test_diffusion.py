@@ -220,6 +220,36 @@ def test_fourtakas_diffuses_the_dynamic_part_conservatively(fourtakas):
     assert 1e-10 < _rel_mass_rate(st_p) < 0.1
 
 
+@pytest.mark.parametrize("gamma", [1.0, 1.4, 7.0])
+def test_hydrostatic_series_match_the_powers_to_round_off(gamma):
+    """The binomial series of Fourtakas's hydrostatic density differences (midpoint and
+    particle forms) against the closed forms in 40-digit decimal arithmetic, over the series'
+    range and beyond it (where the powers take over): within 2 ulp of the value."""
+    from decimal import Decimal, getcontext
+
+    from sphfoam.models.diffusion import (SERIES_Y, binomials, hydrostatic_midpoint,
+                                          hydrostatic_particle)
+
+    getcontext().prec = 40
+    a = 1.0 / gamma
+    c = binomials(a)
+    s = [2.0 * c[k] for k in range(1, 12, 2)]
+    d = [(-1.0) ** (k + 1) * c[k] for k in range(1, 13)]
+    A = Decimal(1) / Decimal(repr(gamma))
+    one = Decimal(1)
+    for v in (1e-9, -3e-6, 4e-4, -0.003, 0.0123, -0.031, 0.049, SERIES_Y, -SERIES_Y, 0.08,
+              -0.2, 0.4):
+        X = Decimal(repr(v))
+        mid = float((one + X) ** A - (one - X) ** A)
+        par = float(one - (one - X) ** A)
+        got_m = hydrostatic_midpoint(v, a, *s)
+        got_p = hydrostatic_particle(v, a, *d)
+        tol = 2.0 * np.spacing(abs(mid)) if abs(v) <= SERIES_Y else 1e-13 * abs(mid)
+        assert abs(got_m - mid) <= tol, (v, got_m, mid)
+        tol = 2.0 * np.spacing(abs(par)) if abs(v) <= SERIES_Y else 1e-13 * abs(par)
+        assert abs(got_p - par) <= tol, (v, got_p, par)
+
+
 def test_bad_reference_is_refused():
     with pytest.raises(Exception, match="reference"):
         registry.build("densityFilter", {"type": "fourtakasDeltaSPH", "reference": "surface"})

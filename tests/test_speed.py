@@ -230,6 +230,8 @@ _HALF_SELECTIONS = {
     "damBreak": {},
     # the flume's laminar viscosity T(3.38)
     "laminar": {"constant/sphProperties:viscosity": {"type": "laminar"}},
+    # Fourtakas et al.'s hydrostatic delta-SPH (midpoint form: odd, so it has a reaction)
+    "fourtakas": {"constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH"}},
     # the finite Gaussian with mirror ghosts (P's kernel and walls)
     "mirror": {"constant/sphProperties:kernel": {"type": "gaussian", "hdx": 1.33},
                "constant/sphProperties:boundary": {"type": "mirrorGhosts", "noSlip": False}},

@@ -148,11 +148,16 @@ else:
 
     def terms(self):
         final = self._SHIFT_FINAL.replace("{coef}", "    " + self._COEF)
+        # an integer exponent n (4, the default) written as a literal: numba then multiplies
+        # (about 2 ns per pair) instead of calling pow (about 20 ns)
+        n = self.coeffs.n
+        pair = (self._SHIFT_PAIR.replace("** shift_n", f"** {int(n)}")
+                if float(n).is_integer() and 1 <= n <= 16 else self._SHIFT_PAIR)
         return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
                      pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
                      reads=("gradW",), writes=self._SURF),
                 Term("shiftingVector", ("prepass",), init=self._SHIFT_INIT,
-                     pair=self._SHIFT_PAIR, final=final, applies=("all",), sees=("all",),
+                     pair=pair, final=final, applies=("all",), sees=("all",),
                      reads=("W", "gradW", *self._SURF), writes=self._DU)]
 
     def advection_velocity(self, sim, u, v):
