@@ -130,6 +130,17 @@ CASE_DIRS = {
     "flume": REPO / "tutorials" / "solitaryWave",
     # P's wall case (finite Gaussian, XSPH, MLS every 20 steps, mirrored walls)
     "wall": REPO / "tutorials" / "solitaryWallRunup",
+    # the flume with issue 13's low-dissipation set-up (studyDict.lowDissipation's
+    # fourtakasShift: Fourtakas's delta-SPH and delta+ shifting in place of Shepard)
+    "flumeLowDiss": REPO / "tutorials" / "solitaryWave",
+}
+#: dictionary edits of a --case beyond the size (``clone_case`` syntax)
+CASE_EDITS = {
+    "flumeLowDiss": {
+        "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
+                                                 "gamma": 7},
+        "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1},
+    },
 }
 #: which case ``make_sim`` builds ("engine": the synthetic dam break above, no case directory)
 CASE = "engine"
@@ -235,7 +246,8 @@ def make_case_sim(name: str, total: int):
     n0, nf0, dx0 = _case_size(src)
     dx = dx_for(total, n0, nf0, dx0)
     tmp = Path(tempfile.mkdtemp(prefix="sphfoam-bench-case-"))
-    edits = {"system/particleDict:dx": dx, "system/controlDict:functions": {}}
+    edits = {"system/particleDict:dx": dx, "system/controlDict:functions": {},
+             **CASE_EDITS.get(name, {})}
     if PRECISION != "double":
         edits["system/sphSchemes:precision"] = PRECISION
     d = clone_case(src, tmp / src.name, edits)

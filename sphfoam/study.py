@@ -337,18 +337,20 @@ def _has_times(path: Path) -> bool:
 
 
 def _case_files(path: Path) -> dict[str, Path]:
-    """The dictionaries of a case (what ``clone_case`` copies), by relative path."""
+    """The dictionaries that define a case (``constant/`` and ``system/``, as ``clone_case``
+    copies them), by relative path; what lies beside them (the study dictionaries, scripts,
+    notes, logs) does not change a run."""
     import fnmatch
 
     out = {}
-    for f in path.rglob("*"):
-        rel = f.relative_to(path)
-        # 0/ is what the set-up makes of the dictionaries; the rest are results (matched at
-        # every level, as clone_case leaves them out)
-        if not f.is_file() or rel.parts[0] in ("0", RESULT) or \
-                any(fnmatch.fnmatch(part, pat) for part in rel.parts for pat in RESULTS):
-            continue
-        out[rel.as_posix()] = f
+    for top in ("constant", "system"):
+        for f in (path / top).rglob("*"):
+            rel = f.relative_to(path)
+            # results inside them are left out, as clone_case leaves them out
+            if not f.is_file() or any(fnmatch.fnmatch(part, pat) for part in rel.parts
+                                      for pat in RESULTS):
+                continue
+            out[rel.as_posix()] = f
     return out
 
 

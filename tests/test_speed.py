@@ -346,3 +346,40 @@ def test_half_lists_give_the_same_results_with_one_and_two_threads(tutorial):
         numba.set_num_threads(before)
     for k in out[1]:
         assert np.array_equal(out[1][k], out[2][k]), k
+
+
+# --- the prepass before the density pass -------------------------------------------------
+def test_density_pass_runs_without_a_prepass_it_does_not_read(tutorial, monkeypatch):
+    """monaghan2007's density-only pass (D^1) needs the prepass only where its terms read what
+    the prepass makes (XSPH's corrected velocity); the shifting vector is read by the next
+    rates evaluation and the drift, after a prepass of their own. Skipping it there (the
+    density loop then computes the kernel instead of reading the pair cache) changes no bit:
+    40 steps of the dam break with delta+ shifting and Fourtakas's delta-SPH against the same
+    run with the prepass forced before every pass."""
+    from sphfoam.engine.codegen import Pipeline
+
+    edits = {"system/particleDict:dx": 0.02,
+             "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH"},
+             "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting"}}
+    runs = []
+    for forced in (False, True):
+        sim = _sim(tutorial, "damBreak", edits)
+        assert sim.pipeline.module.PREPASS_BEFORE == ("rates",)
+        assert sim.pipeline.pair_cache                       # the rates read the cache
+        if forced:
+            monkeypatch.setattr(Pipeline, "prepass_before", lambda self, stage: True)
+        calls = []
+        real = sim.pipeline.prepass
+        monkeypatch.setattr(type(sim.pipeline), "prepass", property(
+            lambda self: (lambda *a: (calls.append(1), real(*a)))))
+        for _ in range(40):
+            sim.step()
+        assert len(calls) == (3 if forced else 2) * 40
+        runs.append(_real(sim))
+        monkeypatch.undo()
+    for k in runs[0]:
+        assert np.array_equal(runs[0][k], runs[1][k]), k
+    xsph = _sim(tutorial, "damBreak", {"system/particleDict:dx": 0.04,
+                                       "constant/sphProperties:velocityCorrection":
+                                       {"type": "xsph"}})
+    assert "density" in xsph.pipeline.module.PREPASS_BEFORE

@@ -195,6 +195,8 @@ def test_a_stopped_run_continues_from_its_last_write(flume, tmp_path):
     (run / "result.json").unlink()
     for t in ("1.5", "2"):
         shutil.rmtree(run / t)
+    # what lies beside the dictionaries (notes, logs, other study dictionaries) is no change
+    (flume / "notes.txt").write_text("started the study again\n")
     said = []
     (part,) = st.run_study(st.load(p), log=said.append)
     assert "1 to run" in said[0]

@@ -349,6 +349,33 @@ class Assembly:
                     changed = True
         return [t for t in terms if not t.on_demand or set(t.writes) & reads]
 
+    def needs_prepass(self, stage: str) -> bool:
+        """Whether the loops of ``stage`` ("density", "filter") read what the prepass makes:
+        a state it sets in place, or an aux or field one of their terms reads. Where they do
+        not, they run without it (and compute the kernel rather than read the pair cache):
+        the prepass's aux are read by the next rates evaluation and the advection hooks,
+        and those always follow a prepass of their own."""
+        pre = [t for t in self.terms if "prepass" in t.stages and not t.on_demand]
+        if not pre:
+            return False
+        made = set()
+        for t in pre:
+            if (set(t.writes) | set(t.corrects)) & set(T.STATE_QUANTITIES):
+                return True
+            made |= set(t.writes)
+        for applies in ("fluid", "wetWall"):
+            for t in self.needed(self.stage(stage, applies)):
+                if set(t.reads) & made:
+                    return True
+        return False
+
+    def cache_mode(self, stage: str) -> str | None:
+        """How the loops of ``stage`` get the cached pair scalars: "read" after a prepass
+        that stored them, None (computed in the loop) otherwise."""
+        if not self.cache or (stage != "rates" and not self.needs_prepass(stage)):
+            return None
+        return "read"
+
     # --- the per-pair cache ------------------------------------------------------------------
     def _unbranched_prepass(self) -> int | None:
         """Index of the first prepass loop in which every particle walks its whole list
@@ -568,7 +595,7 @@ class Assembly:
         ts = [t for t in self.stage(stage, "wetWall") if t.pair or t.init or t.final]
         if not [t for t in ts if not t.on_demand]:
             return "pass"
-        body = self.gather(ts, cache=None if stage == "step" else "read")
+        body = self.gather(ts, cache=None if stage == "step" else self.cache_mode(stage))
         cond = self._cond("wetWall", "a")
         if self.kinds["wetWall"] == "else":
             return body
@@ -616,7 +643,7 @@ class Assembly:
         ids = {id(t) for t in fluid + wet}
         terms = [t for t in self.terms if id(t) in ids]          # the global order
         pre = [t for t in terms if t.on_demand or t.corrects]    # (correctors: with parity)
-        cache = "read" if self.cache else None
+        cache = self.cache_mode(stage)
         pre_code = []
         for t in pre:
             code = t.pair
@@ -746,6 +773,8 @@ AUX = {tuple(aux)!r}
 FIELDS = {tuple(fields)!r}
 {fld_const}
 PAIR_CACHE = {tuple(cache)!r}{cache_const}
+#: the passes the prepass runs before (rates always; see Assembly.needs_prepass)
+PREPASS_BEFORE = {tuple(s for s in ("rates", "density", "filter") if s == "rates" or asm.needs_prepass(s))!r}
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
@@ -830,7 +859,7 @@ def density_rate({_ARGS}, out_drho):
 {_block(_PARTICLE_LOAD, 8)}
         drho_a = 0.0
         if kind[a] == FLUID:
-{_block(asm.gather(asm.stage("density", "fluid"), cache="read"), 12)}
+{_block(asm.gather(asm.stage("density", "fluid"), cache=asm.cache_mode("density")), 12)}
         else:
 {_block(asm.wall_gather("density"), 12)}
         out_drho[a] = drho_a
@@ -1099,6 +1128,13 @@ class Pipeline:
         """Pair scalars the prepass stores per listed pair for the later loops of an
         evaluation (``pc[J_<name>, k]``, an extra last argument of every pair loop)."""
         return tuple(getattr(self.module, "PAIR_CACHE", ()))
+
+    def prepass_before(self, stage: str) -> bool:
+        """Whether the prepass runs before the pass ``stage`` ("rates", "density",
+        "filter"): always before the rates, before the others where they read what it
+        makes."""
+        return self.prepass is not None and stage in getattr(
+            self.module, "PREPASS_BEFORE", ("rates", "density", "filter"))
 
     @property
     def n_aux(self) -> int:

@@ -243,8 +243,8 @@ class Simulation:
             args += (self._pc,)
         return args
 
-    def _prepass(self, args):
-        if self.pipeline.prepass is not None:
+    def _prepass(self, args, stage: str = "rates"):
+        if self.pipeline.prepass_before(stage):
             self.pipeline.prepass(*args)
 
     def position_velocity(self, u, v):
@@ -259,7 +259,7 @@ class Simulation:
         st = self.state
         self.eos()
         args = self._grid_args()
-        self._prepass(args)
+        self._prepass(args, "filter")
         out = np.empty_like(st.rho)
         self.pipeline.density_filter(*args, out)
         st.rho = out
@@ -288,7 +288,7 @@ class Simulation:
     def density_rate(self):
         self._run_hooks("before_evaluation")
         args = self._grid_args()
-        self._prepass(args)
+        self._prepass(args, "density")
         if self.half_lists and self._half is not None and \
                 self.pipeline.density_half is not None:
             self.pipeline.density_half(*args, self._half, self.state.drho)
