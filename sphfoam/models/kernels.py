@@ -141,6 +141,22 @@ def gaussian_dfdq_q(q):
     return -2.0 * exp_neg(q * q)
 
 
+@njit(**_JIT)
+def gaussian_f_q2(q2):
+    """f as a function of q^2 (the pair loops pass r^2 / h^2: no square root)."""
+    if q2 >= GAUSSIAN_Q * GAUSSIAN_Q:
+        return 0.0
+    return exp_neg(q2) - GAUSSIAN_EXP_Q2
+
+
+@njit(**_JIT)
+def gaussian_dfdq_q_q2(q2):
+    """(df/dq)/q as a function of q^2."""
+    if q2 >= GAUSSIAN_Q * GAUSSIAN_Q:
+        return 0.0
+    return -2.0 * exp_neg(q2)
+
+
 class Kernel(PipelineModel):
     """A compactly supported kernel; subclasses name their jitted ``f`` and ``dfdq_q``."""
 
@@ -244,6 +260,21 @@ class Gaussian(Kernel):
     support = GAUSSIAN_Q
     alpha_2d = 1.0 / (math.pi * (1.0 - (1.0 + GAUSSIAN_Q**2) * GAUSSIAN_EXP_Q2))
     f_name, dfdq_q_name = "gaussian_f", "gaussian_dfdq_q"
+
+    # a function of q^2 alone: the pair loops give it r^2 / h^2 and need no square root
+    def imports(self):
+        return ["from sphfoam.models.kernels import gaussian_f as kernel_f, "
+                "gaussian_dfdq_q as kernel_dfdq_q, gaussian_f_q2, gaussian_dfdq_q_q2"]
+
+    def params(self, ctx: CaseContext):
+        return {**super().params(ctx), "kern_ih2": 1.0 / ctx.h**2}
+
+    def terms(self):
+        return [Term("kernelValue", LOOP_STAGES, pair="Wab = kern_w * gaussian_f_q2(r2 * kern_ih2)",
+                     applies=("all",), writes=("W",), cache=("Wab",), parity="even"),
+                Term("kernelGradient", LOOP_STAGES,
+                     pair="fw = kern_gw * gaussian_dfdq_q_q2(r2 * kern_ih2)\ngW@ = fw * d@_ab",
+                     applies=("all",), writes=("gradW",), cache=("fw",), parity="odd")]
 
 
 @register
