@@ -752,6 +752,11 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     #: the arguments of every loop over pairs (``pc``: the per-pair cache, when there is one)
     _ARGS = _ARGS_BASE + (", pc" if cache else "")
     eos = asm.particle_code(asm.stage("particle", "all"), "final")
+    # the passes the prepass runs before (rates always; see Assembly.needs_prepass)
+    prepass_before = ("\n#: the passes the prepass runs before (the rates always)\nPREPASS_BEFORE = "
+                      + repr(tuple(x for x in ("rates", "density", "filter")
+                                   if x == "rates" or asm.needs_prepass(x)))
+                      if asm.has_stage("prepass") else "")
 
     parts = [f'''"""sphfoam pipeline, generated for: {sel.describe()}; adjustTimeStep={sel.adjust_time_step}.
 
@@ -772,9 +777,7 @@ AUX = {tuple(aux)!r}
 {aux_const}
 FIELDS = {tuple(fields)!r}
 {fld_const}
-PAIR_CACHE = {tuple(cache)!r}{cache_const}
-#: the passes the prepass runs before (rates always; see Assembly.needs_prepass)
-PREPASS_BEFORE = {tuple(s for s in ("rates", "density", "filter") if s == "rates" or asm.needs_prepass(s))!r}
+PAIR_CACHE = {tuple(cache)!r}{cache_const}{prepass_before}
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
