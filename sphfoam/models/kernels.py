@@ -194,12 +194,17 @@ class Kernel(PipelineModel):
         h = ctx.h
         return {"kern_w": self.alpha_2d / h**2, "kern_gw": self.alpha_2d / h**4}
 
+    #: the pair code of W_ab and of the gradient factor fw (a kernel of q^2 alone passes
+    #: r^2 / h^2 instead of q = |r| / h and saves the square root)
+    _W_CODE = "Wab = kern_w * kernel_f(q)"
+    _FW_CODE = "fw = kern_gw * kernel_dfdq_q(q)"
+
     def terms(self):
         """W_ab and grad_a W_ab = alpha_d / h^4 (df/dq / q) r_ab, wherever a term reads them."""
-        return [Term("kernelValue", LOOP_STAGES, pair="Wab = kern_w * kernel_f(q)",
+        return [Term("kernelValue", LOOP_STAGES, pair=self._W_CODE,
                      applies=("all",), writes=("W",), cache=("Wab",), parity="even"),
                 Term("kernelGradient", LOOP_STAGES,
-                     pair="fw = kern_gw * kernel_dfdq_q(q)\ngW@ = fw * d@_ab",
+                     pair=self._FW_CODE + "\ngW@ = fw * d@_ab",
                      applies=("all",), writes=("gradW",), cache=("fw",), parity="odd")]
 
     def h(self, dx: float) -> float:
@@ -269,12 +274,8 @@ class Gaussian(Kernel):
     def params(self, ctx: CaseContext):
         return {**super().params(ctx), "kern_ih2": 1.0 / ctx.h**2}
 
-    def terms(self):
-        return [Term("kernelValue", LOOP_STAGES, pair="Wab = kern_w * gaussian_f_q2(r2 * kern_ih2)",
-                     applies=("all",), writes=("W",), cache=("Wab",), parity="even"),
-                Term("kernelGradient", LOOP_STAGES,
-                     pair="fw = kern_gw * gaussian_dfdq_q_q2(r2 * kern_ih2)\ngW@ = fw * d@_ab",
-                     applies=("all",), writes=("gradW",), cache=("fw",), parity="odd")]
+    _W_CODE = "Wab = kern_w * gaussian_f_q2(r2 * kern_ih2)"
+    _FW_CODE = "fw = kern_gw * gaussian_dfdq_q_q2(r2 * kern_ih2)"
 
 
 @register
