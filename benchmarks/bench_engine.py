@@ -907,7 +907,9 @@ def main(argv=None):
     ap.add_argument("--case", choices=["engine", *CASE_DIRS], default="engine",
                     help="engine: the synthetic dam break (default); matched: the dam break "
                     "matched with DualSPHysics (benchmarks/cases/damBreakMatched); flume: "
-                    "tutorials/solitaryWave; wall: tutorials/solitaryWallRunup (P's set-up)")
+                    "tutorials/solitaryWave; wall: tutorials/solitaryWallRunup (P's set-up); "
+                    "flumeLowDiss: the flume with Fourtakas's delta-SPH and delta+ shifting "
+                    "(issue 13's low-dissipation set-up)")
     ap.add_argument("--precision", choices=["double", "single"], default="double",
                     help="sphSchemes precision of the --case runs (default double)")
     ap.add_argument("--_compile-child", type=int, default=None, help=argparse.SUPPRESS)
