@@ -354,11 +354,11 @@ def test_density_pass_runs_without_a_prepass_it_does_not_read(tutorial, monkeypa
     the prepass makes (XSPH's corrected velocity); the shifting vector is read by the next
     rates evaluation and the drift, after a prepass of their own. Skipping it there (the
     density loop then computes the kernel instead of reading the pair cache) changes no bit:
-    40 steps of the dam break with delta+ shifting and Fourtakas's delta-SPH against the same
+    25 steps of the dam break with delta+ shifting and Fourtakas's delta-SPH against the same
     run with the prepass forced before every pass."""
     from sphfoam.engine.codegen import Pipeline
 
-    edits = {"system/particleDict:dx": 0.02,
+    edits = {"system/particleDict:dx": 0.03,
              "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH"},
              "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting"}}
     runs = []
@@ -372,9 +372,9 @@ def test_density_pass_runs_without_a_prepass_it_does_not_read(tutorial, monkeypa
         real = sim.pipeline.prepass
         monkeypatch.setattr(type(sim.pipeline), "prepass", property(
             lambda self: (lambda *a: (calls.append(1), real(*a)))))
-        for _ in range(40):
+        for _ in range(25):
             sim.step()
-        assert len(calls) == (3 if forced else 2) * 40
+        assert len(calls) == (3 if forced else 2) * 25
         runs.append(_real(sim))
         monkeypatch.undo()
     for k in runs[0]:
