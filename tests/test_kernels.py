@@ -288,3 +288,6 @@ def test_gaussian_exponential_is_exact_to_round_off():
             exact = float((-Decimal(float(v))).exp())
             worst = max(worst, abs(exp_neg(float(v)) - exact) / np.spacing(exact))
     assert worst <= 1.5, worst
+    # a run blowing up (NaN, inf or huge q^2) reads nothing outside the table
+    for bad in (float("nan"), float("inf"), -1.0, 1e300):
+        exp_neg(bad)

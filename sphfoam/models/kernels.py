@@ -112,6 +112,7 @@ def _exp_table() -> np.ndarray:
 
 
 _EXP_TABLE = _exp_table()
+_EXP_LAST = _EXP_TABLE.shape[0] - 1
 _EXP_C = [(-1.0) ** k / math.factorial(k) for k in range(8)]
 _E3, _E4, _E5, _E6, _E7 = _EXP_C[3:]
 
@@ -119,7 +120,8 @@ _E3, _E4, _E5, _E6, _E7 = _EXP_C[3:]
 @njit(**_JIT)
 def exp_neg(s):
     """exp(-s) for 0 <= s < 9 (the finite Gaussian's q^2)."""
-    n = int(s * EXP_STEPS)
+    # clamped: a NaN or out-of-range s (a run blowing up) must not read outside the table
+    n = min(max(int(s * EXP_STEPS), 0), _EXP_LAST)
     f = s - n * (1.0 / EXP_STEPS)
     # exp(-f) - 1, added as t + t g so that its rounding counts only at 1/64 of its weight
     g = -f * (1.0 - f * (0.5 + f * (_E3 + f * (_E4 + f * (_E5 + f * (_E6 + f * _E7))))))
