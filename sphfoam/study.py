@@ -296,7 +296,7 @@ def prepare(study: Study, rerun: bool = False, log=print) -> list[RunSpec]:
                                    f"a plain folder directly inside the study {study.root}")
         if not rerun and (path / RESULT).is_file():
             continue
-        if not rerun and _has_times(path):
+        if not rerun and _latest_time(path) > 0.0:
             # an interrupted run (its study was stopped): continue it from its last written
             # time when it is still the same case; a run of another definition is kept aside
             fresh = clone_case(study.base, path.with_name(f".{path.name}.clone"),
@@ -329,11 +329,6 @@ def _latest_time(path: Path) -> float:
     from sphfoam.io.fields import has_particles
 
     return max([t for t, p in list_times(path) if t > 0.0 and has_particles(p)], default=0.0)
-
-
-def _has_times(path: Path) -> bool:
-    """Whether a run folder holds a written time after 0 (an interrupted run's results)."""
-    return _latest_time(path) > 0.0
 
 
 def _case_files(path: Path) -> dict[str, Path]:

@@ -1136,8 +1136,7 @@ class Pipeline:
         """Whether the prepass runs before the pass ``stage`` ("rates", "density",
         "filter"): always before the rates, before the others where they read what it
         makes."""
-        return self.prepass is not None and stage in getattr(
-            self.module, "PREPASS_BEFORE", ("rates", "density", "filter"))
+        return self.prepass is not None and stage in self.module.PREPASS_BEFORE
 
     @property
     def n_aux(self) -> int:

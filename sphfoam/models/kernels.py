@@ -130,20 +130,6 @@ def exp_neg(s):
 
 
 @njit(**_JIT)
-def gaussian_f(q):
-    if q >= GAUSSIAN_Q:
-        return 0.0
-    return exp_neg(q * q) - GAUSSIAN_EXP_Q2
-
-
-@njit(**_JIT)
-def gaussian_dfdq_q(q):
-    if q >= GAUSSIAN_Q:
-        return 0.0
-    return -2.0 * exp_neg(q * q)
-
-
-@njit(**_JIT)
 def gaussian_f_q2(q2):
     """f as a function of q^2 (the pair loops pass r^2 / h^2: no square root)."""
     if q2 >= GAUSSIAN_Q * GAUSSIAN_Q:
@@ -157,6 +143,16 @@ def gaussian_dfdq_q_q2(q2):
     if q2 >= GAUSSIAN_Q * GAUSSIAN_Q:
         return 0.0
     return -2.0 * exp_neg(q2)
+
+
+@njit(**_JIT)
+def gaussian_f(q):
+    return gaussian_f_q2(q * q)
+
+
+@njit(**_JIT)
+def gaussian_dfdq_q(q):
+    return gaussian_dfdq_q_q2(q * q)
 
 
 class Kernel(PipelineModel):
