@@ -98,7 +98,8 @@ vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
                      final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
                      writes=self._DV),
                 Term("xsphContinuity", ("rates", "density"), pair=self._UC,
-                     applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",))]
+                     applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",),
+                     parity="odd")]
 
     def advection_velocity(self, sim, u, v):
         """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own)."""
