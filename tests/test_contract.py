@@ -183,9 +183,10 @@ def test_the_kernel_value_is_computed_only_where_read():
     plain = source(selection())
     xsph = source(selection(velocityCorrection={"type": "xsph"}))
     assert "Wab" not in plain
-    pre = xsph[xsph.index("def prepass"):xsph.index("def rates")]
-    assert "Wab = kern_w" in pre
-    assert "Wab" not in xsph[xsph.index("def rates"):]
+    funcs = {f.split("(")[0]: f for f in xsph.split("\ndef ")[1:]}
+    assert "Wab = kern_w" in funcs["prepass"] and "Wab = kern_w" in funcs["prepass_half"]
+    for name in ("rates", "density_rate", "rates_half", "density_half"):
+        assert "Wab" not in funcs[name], name
 
 
 def test_the_old_csph_word_still_selects_csph():

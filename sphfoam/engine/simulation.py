@@ -103,6 +103,8 @@ class Simulation:
         self.half_lists = True
         #: the current list's array for the half-list loops (``Pipeline.half_lists``), or None
         self._half = None
+        #: the per-particle sums of the half-list prepass (``Pipeline.prepass_half``)
+        self._sums = None
         #: per-range partial results of the whole-state reductions (no allocation per step)
         self._reduce = np.empty((3, REDUCTION_CHUNKS))
         #: positions at the last build of the list (None: rebuild at the next step)
@@ -244,8 +246,17 @@ class Simulation:
         return args
 
     def _prepass(self, args, stage: str = "rates"):
-        if self.pipeline.prepass_before(stage):
-            self.pipeline.prepass(*args)
+        pipe = self.pipeline
+        if not pipe.prepass_before(stage):
+            return
+        if self.half_lists and self._half is not None and pipe.prepass_half is not None:
+            # over half lists: then the loops after it are half-list loops too
+            # (Assembly.prepass_half_terms), which read the pair cache where it stored it
+            if self._sums is None or self._sums.shape[1] != self.state.n:
+                self._sums = np.empty((pipe.prepass_sums, self.state.n), dtype=self.dtype)
+            pipe.prepass_half(*args, self._half, self._sums)
+        else:
+            pipe.prepass(*args)
 
     def position_velocity(self, u, v):
         """The velocity positions are advanced with: (u, v) itself, or what the selected

@@ -112,6 +112,11 @@ class Term:
     #: the quantities of (b, a) follow from their definers' ``parity``. A stage whose terms
     #: with pair code do not all have one (or that has ``final`` code) keeps the gather
     reaction: str = ""
+    #: of a prepass term: the per-particle sums its ``init`` sets to 0.0 and its ``pair`` code
+    #: adds to. With a ``reaction`` (adding to ``<name>_b`` the pair (b, a)'s contribution to
+    #: b's sum) the prepass can run over half lists too (``prepass_half``): the sums are then
+    #: kept per particle in an array, and ``final`` reads them back
+    sums: tuple[str, ...] = ()
     #: of a definer or corrector of pair quantities: "even" when those of the pair (b, a)
     #: equal those of (a, b) (the kernel value), "odd" when they are their negatives (grad W,
     #: uc, XSPH's corrected uc); "" (e.g. a kernel correction, which depends on a's moment
@@ -230,6 +235,11 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
         if t.reaction and (t.on_demand or not t.pair):
             raise ContractError(f"{t.who()} declares a reaction but has no pair code of its "
                                 "own to mirror")
+        for name in t.sums:
+            if "prepass" not in t.stages or \
+                    not re.search(rf"(?m)^{re.escape(name)} = 0\.0$", t.init):
+                raise ContractError(f"{t.who()} declares the sum {name!r}: only a prepass term "
+                                    f"whose init sets it ('{name} = 0.0') may")
     for t in terms:
         for name in t.cache:
             if not t.on_demand or t.reads:

@@ -77,6 +77,12 @@ xsph_w = 2.0 * mb / (rhoa + rhob) * Wab
 xsph_su -= xsph_w * u_ab
 xsph_sv -= xsph_w * v_ab
 """
+    #: b's sums for the pair (b, a): m_a W_ba / rhobar (v_a - v_b), v_a - v_b = v_ab
+    _REACTION = """\
+xsph_w_b = 2.0 * ma / (rhoa + rhob) * Wab
+xsph_su_b += xsph_w_b * u_ab
+xsph_sv_b += xsph_w_b * v_ab
+"""
     _FINAL = """\
 if kind[a] == FLUID:
     aux[I_xsph_du, a] = vc_eps * xsph_su
@@ -96,7 +102,7 @@ vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
     def terms(self):
         return [Term("xsphVelocity", ("prepass",), init=self._INIT, pair=self._PAIR,
                      final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
-                     writes=self._DV),
+                     writes=self._DV, reaction=self._REACTION, sums=("xsph_su", "xsph_sv")),
                 Term("xsphContinuity", ("rates", "density"), pair=self._UC,
                      applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",),
                      parity="odd")]
