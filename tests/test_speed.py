@@ -232,7 +232,9 @@ _HALF_SELECTIONS = {
     # the flume's laminar viscosity T(3.38)
     "laminar": {"constant/sphProperties:viscosity": {"type": "laminar"}},
     # Fourtakas et al.'s hydrostatic delta-SPH (midpoint form: odd, so it has a reaction)
-    "fourtakas": {"constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH"}},
+    # with delta+ shifting (its prepass over half lists: the concentration gradient's sums)
+    "fourtakas": {"constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH"},
+                  "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting"}},
     # the finite Gaussian with mirror ghosts and XSPH (P's kernel, walls and corrected
     # continuity velocity, odd in the pair)
     "mirror": {"constant/sphProperties:kernel": {"type": "gaussian", "hdx": 1.33},
@@ -372,8 +374,9 @@ def test_density_pass_runs_without_a_prepass_it_does_not_read(tutorial, monkeypa
         if forced:
             monkeypatch.setattr(Pipeline, "prepass_before", lambda self, stage: True)
         calls = []
-        real = sim.pipeline.prepass
-        monkeypatch.setattr(type(sim.pipeline), "prepass", property(
+        real = sim.pipeline.prepass_half              # (over half lists: shifting's sums)
+        assert real is not None
+        monkeypatch.setattr(type(sim.pipeline), "prepass_half", property(
             lambda self: (lambda *a: (calls.append(1), real(*a)))))
         for _ in range(25):
             sim.step()

@@ -102,10 +102,12 @@ else:
     aux[I_shift_nx, a] = 0.0
     aux[I_shift_ny, a] = 0.0
 """
+    # shift_ns counts the fluid neighbours near the surface (a sum, so that the half-list
+    # prepass can add b's count to it)
     _SHIFT_INIT = """\
 shift_cx = 0.0
 shift_cy = 0.0
-shift_near = aux[I_shift_lambda, a] < shift_lam
+shift_ns = 0.0
 shift_iwdx = 1.0 / (kern_w * kernel_f(shift_qdx))
 """
     _SHIFT_PAIR = """\
@@ -113,9 +115,18 @@ shift_w = 1.0 + shift_r * (Wab * shift_iwdx) ** shift_n
 shift_cx += shift_w * gWx * mb / rhob
 shift_cy += shift_w * gWy * mb / rhob
 if kindb == FLUID and aux[I_shift_lambda, b] < shift_lam:
-    shift_near = True
+    shift_ns += 1.0
+"""
+    #: b's sums for the pair (b, a): grad_b W_ba = -gW@, V_a, and a near the surface (the
+    #: anti-clumping factor shift_w is the pair's own, W_ba = W_ab)
+    _SHIFT_REACTION = """\
+shift_cx_b -= shift_w * gWx * ma / rhoa
+shift_cy_b -= shift_w * gWy * ma / rhoa
+if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
+    shift_ns_b += 1.0
 """
     _SHIFT_FINAL = """\
+shift_near = shift_ns > 0.0 or aux[I_shift_lambda, a] < shift_lam
 if kind[a] == FLUID:
 {coef}
     shift_du = -shift_k * shift_cx
@@ -158,7 +169,8 @@ else:
                      reads=("gradW",), writes=self._SURF),
                 Term("shiftingVector", ("prepass",), init=self._SHIFT_INIT,
                      pair=pair, final=final, applies=("all",), sees=("all",),
-                     reads=("W", "gradW", *self._SURF), writes=self._DU)]
+                     reads=("W", "gradW", *self._SURF), writes=self._DU,
+                     reaction=self._SHIFT_REACTION, sums=("shift_cx", "shift_cy", "shift_ns"))]
 
     def advection_velocity(self, sim, u, v):
         """Positions move with (u, v) + delta_u of the last pre-pass (walls: unchanged)."""
