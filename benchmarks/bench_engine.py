@@ -130,12 +130,18 @@ CASE_DIRS = {
     "flume": REPO / "tutorials" / "solitaryWave",
     # P's wall case (finite Gaussian, XSPH, MLS every 20 steps, mirrored walls)
     "wall": REPO / "tutorials" / "solitaryWallRunup",
+    # the same with XSPH's velocity once per step (velocityCorrection evaluation oncePerStep)
+    "wallOnce": REPO / "tutorials" / "solitaryWallRunup",
     # the flume with issue 13's low-dissipation set-up (studyDict.lowDissipation's
     # fourtakasShift: Fourtakas's delta-SPH and delta+ shifting in place of Shepard)
     "flumeLowDiss": REPO / "tutorials" / "solitaryWave",
 }
 #: dictionary edits of a --case beyond the size (``clone_case`` syntax)
 CASE_EDITS = {
+    "wallOnce": {
+        "constant/sphProperties:velocityCorrection": {"type": "xsph", "epsilon": 0.5,
+                                                      "evaluation": "oncePerStep"},
+    },
     "flumeLowDiss": {
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
                                                  "gamma": 7},

@@ -77,3 +77,17 @@ def test_wall_study_references_are_the_best_theory(tmp_path):
         assert float(md["runUpParticle"]["reference"]) == pytest.approx(ref, abs=5e-5)
         assert float(md["celerity"]["height"]) == pytest.approx(10.0 * a)
         assert md["celerity"]["theory"] == "euler"
+
+
+def test_collision_study_clones_into_valid_cases(tmp_path):
+    """tutorials/solitaryCollision/studyDict.lowDissipation: P's set-up and the
+    low-dissipation combination, both measured against the exact wave's celerity."""
+    base = _copy(tmp_path, "solitaryCollision")
+    s = st.load(base / "studyDict.lowDissipation")
+    assert [r.name for r in s.runs] == ["P", "fourtakas"]
+    st.prepare(s)
+    for run in s.runs:
+        m = foamdict.read(Path(run.path) / "system" / "metricsDict")["metrics"]
+        assert m["celerity"]["theory"] == "euler" and m["peak"]["reference"] == 5.377
+    waves = foamdict.read(Path(s.runs[1].path) / "constant" / "waveProperties")["waves"]
+    assert {w["theory"] for w in waves.values()} == {"euler"}

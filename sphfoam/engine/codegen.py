@@ -385,11 +385,17 @@ class Assembly:
                 return i
         return None
 
+    def prepass_once(self) -> bool:
+        """Whether the prepass runs once per step (its terms say ``per_step``): then the
+        loops of the later stages compute the kernel, the pair cache being the first's."""
+        return any(t.per_step for t in self.terms
+                   if "prepass" in t.stages and not t.on_demand)
+
     def _pair_cache(self) -> list[str]:
         """Names of the geometry-only pair scalars (``Term.cache``) the loops after the
         prepass read, when a prepass loop walks every particle's list and can store them
         once per evaluation (exact: the same expression of the same r2 and q)."""
-        if self._unbranched_prepass() is None:
+        if self._unbranched_prepass() is None or self.prepass_once():
             return []
         names = []
         # the loops of every evaluation (the periodic filter recomputes what it needs)
@@ -804,6 +810,8 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     prepass_before = ("\n#: the passes the prepass runs before (the rates always)\nPREPASS_BEFORE = "
                       + repr(tuple(x for x in ("rates", "density", "filter")
                                    if x == "rates" or asm.needs_prepass(x)))
+                      + "\n#: the prepass runs once per step, before the step's first evaluation"
+                      + f"\nPREPASS_ONCE = {asm.prepass_once()}"
                       if asm.has_stage("prepass") else "")
 
     # the sums of the half-list prepass, one row each of its array ``hs``
@@ -1191,6 +1199,11 @@ class Pipeline:
     def prepass(self):
         """None when no selected model needs per-particle auxiliary fields."""
         return getattr(self.module, "prepass", None)
+
+    @property
+    def prepass_once(self) -> bool:
+        """Whether the prepass runs once per step (``Assembly.prepass_once``)."""
+        return bool(getattr(self.module, "PREPASS_ONCE", False))
 
     @property
     def prepass_half(self):

@@ -105,6 +105,8 @@ class Simulation:
         self._half = None
         #: the per-particle sums of the half-list prepass (``Pipeline.prepass_half``)
         self._sums = None
+        #: in a step: whether its prepass ran (``Pipeline.prepass_once``); None outside a step
+        self._prepassed = None
         #: per-range partial results of the whole-state reductions (no allocation per step)
         self._reduce = np.empty((3, REDUCTION_CHUNKS))
         #: positions at the last build of the list (None: rebuild at the next step)
@@ -249,6 +251,12 @@ class Simulation:
         pipe = self.pipeline
         if not pipe.prepass_before(stage):
             return
+        if pipe.prepass_once:
+            # once per step: before the step's first evaluation (outside a step: always)
+            if self._prepassed:
+                return
+            if self._prepassed is not None:
+                self._prepassed = True
         if self.half_lists and self._half is not None and pipe.prepass_half is not None:
             # over half lists: then the loops after it are half-list loops too
             # (Assembly.prepass_half_terms), which read the pair cache where it stored it
@@ -324,7 +332,11 @@ class Simulation:
                              self.filter_schedule.due_before_step(self.step_index))
         if self.filtered:
             self.filter_density()
-        dt = self.integrator.step(self, dt_remaining)
+        self._prepassed = False
+        try:
+            dt = self.integrator.step(self, dt_remaining)
+        finally:
+            self._prepassed = None
         self.time += dt
         self.step_index += 1
         self._run_hooks("after_step")

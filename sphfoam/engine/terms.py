@@ -129,6 +129,11 @@ class Term:
     #: rebuilding the list). The definers of pair quantities (W, gradW, uc) count as weighted:
     #: what reads them is
     weighted: bool = True
+    #: of a prepass term: True when what it makes is computed once per step, from the step's
+    #: first state, and held through the step's later stages (e.g. XSPH's velocity with
+    #: ``evaluation oncePerStep``); False (the default) when afresh before every evaluation.
+    #: The prepass is one loop: its terms must agree
+    per_step: bool = False
     #: a pair force coefficient F_ab equal to F_ba (an expression of the pair and of
     #: a's ``init`` names): the term adds -m_b F_ab grad_a W_ab to dv_a/dt and, over half
     #: lists, +m_a F_ab grad_a W_ab to dv_b/dt. Its ``pair`` and ``reaction`` code are
@@ -240,6 +245,13 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
                     not re.search(rf"(?m)^{re.escape(name)} = 0\.0$", t.init):
                 raise ContractError(f"{t.who()} declares the sum {name!r}: only a prepass term "
                                     f"whose init sets it ('{name} = 0.0') may")
+    pre = [t for t in terms if "prepass" in t.stages and not t.on_demand]
+    for t in pre:
+        if t.per_step != pre[0].per_step:
+            once, each = (t, pre[0]) if t.per_step else (pre[0], t)
+            raise ContractError(f"{once.who()} is computed once per step but {each.who()} "
+                                "before every evaluation, and they share the prepass: "
+                                "select the former's evaluation everyStage")
     for t in terms:
         for name in t.cache:
             if not t.on_demand or t.reads:
