@@ -54,6 +54,24 @@ def _block(code: str, indent: int) -> str:
     return textwrap.indent(code, " " * indent) if code else ""
 
 
+#: the loop of the half-list functions over the particles of each band of cell rows, in two
+#: colours (see ``rates_half``'s docstring), with a's state loaded
+_HALF_BANDS = """\
+n = x.shape[0]
+for colour in range(2):
+    for band in prange((half.shape[0] - n - colour) // 2):
+        ib = n + 2 * band + colour
+        for a in range(half[ib], half[ib + 1]):
+{body}"""
+
+
+def _half_bands(*parts: str) -> str:
+    """``_HALF_BANDS`` with ``parts`` (code of particle a) as the body."""
+    body = "\n".join([_block(_PARTICLE_LOAD, 0), "ma = m[a]\nkinda = kind[a]",
+                      *(_block(x, 0) for x in parts)])
+    return _HALF_BANDS.format(body=_block(body, 12))
+
+
 def _indent(code: str, n: int = 4) -> str:
     code = textwrap.dedent(code).strip("\n")
     return textwrap.indent(code, " " * n) if code else " " * n + "pass"
@@ -1002,17 +1020,7 @@ def {name}({_ARGS}, half, {outs}):
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
 {_block(zero, 8)}
-    n = x.shape[0]
-    for colour in range(2):
-        for band in prange((half.shape[0] - n - colour) // 2):
-            ib = n + 2 * band + colour
-            for a in range(half[ib], half[ib + 1]):
-{_block(_PARTICLE_LOAD, 16)}
-                ma = m[a]
-                kinda = kind[a]
-{_block(start, 16)}
-{_block(body, 16)}
-{_block(end, 16)}
+{_block(_half_bands(start, body, end), 4)}
 ''')
     if asm.prepass_half_terms() is not None:
         zero = "\n".join(f"hs[S_{n}, a] = 0.0" for n in asm.prepass_half_sums())
@@ -1027,15 +1035,7 @@ def prepass_half({_ARGS}, half, hs):
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
 {_block(zero, 8)}
-    n = x.shape[0]
-    for colour in range(2):
-        for band in prange((half.shape[0] - n - colour) // 2):
-            ib = n + 2 * band + colour
-            for a in range(half[ib], half[ib + 1]):
-{_block(_PARTICLE_LOAD, 16)}
-                ma = m[a]
-                kinda = kind[a]
-{_block(asm.prepass_half_loop(), 16)}
+{_block(_half_bands(asm.prepass_half_loop()), 4)}
     for a in prange(x.shape[0]):
 {_block(_PARTICLE_LOAD, 8)}
 {_block(asm.prepass_half_final(), 8)}
