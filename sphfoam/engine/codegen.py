@@ -594,10 +594,10 @@ class Assembly:
             return None
         ts = self.needed(groups[0])
         for t in ts:
-            if t.on_demand or t.corrects:
-                if not t.parity or t.corrects:
-                    return None
-            elif not (t.reaction and t.sums and "all" in t.applies and "all" in self.sees(t)):
+            if t.corrects or (t.on_demand and not t.parity):
+                return None
+            if not t.on_demand and not (t.reaction and t.sums and "all" in t.applies
+                                        and "all" in self.sees(t)):
                 return None
         if self.half_terms("rates") is None or self.needs_prepass("filter") or \
                 (self.needs_prepass("density") and self.half_terms("density") is None):
