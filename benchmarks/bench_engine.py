@@ -135,6 +135,9 @@ CASE_DIRS = {
     # the flume with issue 13's low-dissipation set-up (studyDict.lowDissipation's
     # fourtakasShift: Fourtakas's delta-SPH and delta+ shifting in place of Shepard)
     "flumeLowDiss": REPO / "tutorials" / "solitaryWave",
+    # P's kernel and walls alone (finite Gaussian R = 4 dx, mirrored walls; no XSPH, no MLS):
+    # what P's neighbour count costs before any of P's corrections (the floor of "wall")
+    "wallBare": REPO / "tutorials" / "solitaryWallRunup",
 }
 #: dictionary edits of a --case beyond the size (``clone_case`` syntax)
 CASE_EDITS = {
@@ -146,6 +149,10 @@ CASE_EDITS = {
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
                                                  "gamma": 7},
         "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1},
+    },
+    "wallBare": {
+        "constant/sphProperties:velocityCorrection": {"type": "none"},
+        "constant/sphProperties:densityFilter": {"type": "none"},
     },
 }
 #: which case ``make_sim`` builds ("engine": the synthetic dam break above, no case directory)

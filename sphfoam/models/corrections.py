@@ -29,6 +29,13 @@ def add_correction(u, du, kind):
     return out
 
 
+@njit(parallel=True, cache=True, fastmath=set(FASTMATH))
+def add_rate(rate, extra):
+    """rate += extra in place (a model's per-particle addition to a rate)."""
+    for a in prange(rate.shape[0]):
+        rate[a] += extra[a]
+
+
 class VelocityCorrection(PipelineModel):
     family = "velocityCorrection"
     prefix = "vc_"

@@ -26,7 +26,14 @@ Both models share
   tangential rule.
 
 The shift moves positions only: the momentum and continuity equations use v, so linear momentum
-is unaffected (the Lagrangian re-meshing is an error of the order of the shift itself).
+is unaffected (the Lagrangian re-meshing is an error of the order of the shift itself). With
+``correctVelocity yes`` a fluid particle's velocity follows the flow to where the shift takes it:
+du_a/dt gains (delta_u_a . grad) u_a, the first-order Taylor correction of Lind et al. (2012),
+which is the convective term of the ALE equations of Sun, Colagrossi, Marrone, Antuono & Zhang
+(2019, CMAME 348) for particles moving with u + delta_u; grad u_a = sum_b V_b (u_b - u_a)
+grad_a W_ab over the fluid neighbours (walls' velocities are not the fluid's), summed in the same
+pre-pass as grad C. (Their density term delta_u . grad rho is left out: in a hydrostatic
+column it is rho0 g delta_v / c0^2, below the density diffusion's own error.)
 """
 
 from __future__ import annotations
@@ -35,7 +42,7 @@ from pydantic import Field
 
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
-from sphfoam.models.corrections import add_correction
+from sphfoam.models.corrections import add_correction, add_rate
 from sphfoam.registry import Coeffs, register
 
 
@@ -52,6 +59,11 @@ class _ShiftCoeffs(Coeffs):
         "shifted at all (0, the default: it is shifted tangentially like the particles "
         "next to it; 0.55 keeps a flat surface's first row, lambda ~ 0.5, and the tip of a "
         "sheet in place)"))
+    correctVelocity: bool = Field(False, description=(
+        "correct each fluid particle's velocity for its shift: du_a/dt += (delta_u_a . grad) "
+        "u_a, the first-order Taylor correction of Lind et al. (2012) written as the "
+        "convective term of the ALE form (Sun et al. 2019); grad u_a = sum_b V_b (u_b - u_a) "
+        "grad_a W_ab over fluid neighbours. no (the default): the shift moves positions only"))
 
 
 class ParticleShifting(PipelineModel):
@@ -125,6 +137,37 @@ shift_cy_b -= shift_w * gWy * ma / rhoa
 if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
     shift_ns_b += 1.0
 """
+    #: with correctVelocity: grad u_a = sum_b V_b (u_b - u_a) grad_a W_ab over fluid b (and b's
+    #: sum from the pair (b, a): V_a (u_a - u_b) grad_b W_ba, the same sign)
+    _GRADU_INIT = """\
+shift_gux = 0.0
+shift_guy = 0.0
+shift_gvx = 0.0
+shift_gvy = 0.0
+"""
+    _GRADU_PAIR = """\
+if kindb == FLUID:
+    shift_gux -= u_ab * gWx * mb / rhob
+    shift_guy -= u_ab * gWy * mb / rhob
+    shift_gvx -= v_ab * gWx * mb / rhob
+    shift_gvy -= v_ab * gWy * mb / rhob
+"""
+    _GRADU_REACTION = """\
+if kinda == FLUID:
+    shift_gux_b -= u_ab * gWx * ma / rhoa
+    shift_guy_b -= u_ab * gWy * ma / rhoa
+    shift_gvx_b -= v_ab * gWx * ma / rhoa
+    shift_gvy_b -= v_ab * gWy * ma / rhoa
+"""
+    #: (delta_u . grad) u, the acceleration ``after_rates`` adds
+    _GRADU_FINAL = """\
+if kind[a] == FLUID:
+    aux[I_shift_ax, a] = aux[I_shift_du, a] * shift_gux + aux[I_shift_dv, a] * shift_guy
+    aux[I_shift_ay, a] = aux[I_shift_du, a] * shift_gvx + aux[I_shift_dv, a] * shift_gvy
+else:
+    aux[I_shift_ax, a] = 0.0
+    aux[I_shift_ay, a] = 0.0
+"""
     _SHIFT_FINAL = """\
 shift_near = shift_ns > 0.0 or aux[I_shift_lambda, a] < shift_lam
 if kind[a] == FLUID:
@@ -164,13 +207,22 @@ else:
         n = self.coeffs.n
         pair = (self._SHIFT_PAIR.replace("** shift_n", f"** {int(n)}")
                 if float(n).is_integer() and 1 <= n <= 16 else self._SHIFT_PAIR)
+        init, reaction, writes = self._SHIFT_INIT, self._SHIFT_REACTION, self._DU
+        sums = ("shift_cx", "shift_cy", "shift_ns")
+        if self.coeffs.correctVelocity:
+            init += self._GRADU_INIT
+            pair += self._GRADU_PAIR
+            reaction += self._GRADU_REACTION
+            final += self._GRADU_FINAL
+            writes += ("aux.shift_ax", "aux.shift_ay")
+            sums += ("shift_gux", "shift_guy", "shift_gvx", "shift_gvy")
         return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
                      pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
                      reads=("gradW",), writes=self._SURF),
-                Term("shiftingVector", ("prepass",), init=self._SHIFT_INIT,
+                Term("shiftingVector", ("prepass",), init=init,
                      pair=pair, final=final, applies=("all",), sees=("all",),
-                     reads=("W", "gradW", *self._SURF), writes=self._DU,
-                     reaction=self._SHIFT_REACTION, sums=("shift_cx", "shift_cy", "shift_ns"))]
+                     reads=("W", "gradW", *self._SURF), writes=writes,
+                     reaction=reaction, sums=sums)]
 
     def advection_velocity(self, sim, u, v):
         """Positions move with (u, v) + delta_u of the last pre-pass (walls: unchanged)."""
@@ -178,6 +230,15 @@ else:
         du = sim.aux[pipe.aux_index("shift_du")]
         dv = sim.aux[pipe.aux_index("shift_dv")]
         return add_correction(u, du, sim.state.kind), add_correction(v, dv, sim.state.kind)
+
+    def after_rates(self, sim):
+        """With ``correctVelocity``: du_a/dt += (delta_u_a . grad) u_a from the pre-pass of
+        this evaluation (zero for walls)."""
+        if not self.coeffs.correctVelocity:
+            return
+        pipe, st = sim.pipeline, sim.state
+        add_rate(st.ax, sim.aux[pipe.aux_index("shift_ax")])
+        add_rate(st.ay, sim.aux[pipe.aux_index("shift_ay")])
 
 
 @register
