@@ -138,6 +138,8 @@ CASE_DIRS = {
     # P's kernel and walls alone (finite Gaussian R = 4 dx, mirrored walls; no XSPH, no MLS):
     # what P's neighbour count costs before any of P's corrections (the floor of "wall")
     "wallBare": REPO / "tutorials" / "solitaryWallRunup",
+    # flumeLowDiss with the shift's velocity correction (particleShifting correctVelocity)
+    "flumeLowDissCv": REPO / "tutorials" / "solitaryWave",
 }
 #: dictionary edits of a --case beyond the size (``clone_case`` syntax)
 CASE_EDITS = {
@@ -149,6 +151,12 @@ CASE_EDITS = {
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
                                                  "gamma": 7},
         "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1},
+    },
+    "flumeLowDissCv": {
+        "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
+                                                 "gamma": 7},
+        "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1,
+                                                    "correctVelocity": True},
     },
     "wallBare": {
         "constant/sphProperties:velocityCorrection": {"type": "none"},

@@ -118,8 +118,8 @@ class Simulation:
         self.segments = list(segments)
         self._hooks = {name: sel.hooks(name) for name in
                        ("before_neighbours", "add_particles", "after_sort",
-                        "before_evaluation", "after_rates", "walls_moved", "after_step",
-                        "keeps_neighbours")}
+                        "before_evaluation", "after_rates", "after_density_rate",
+                        "walls_moved", "after_step", "keeps_neighbours")}
         #: the models that make the advection velocity, applied in selection order, each to
         #: the previous one's result (XSPH, then a particle shifting)
         self._advection = sel.hooks("advection_velocity")
@@ -313,6 +313,7 @@ class Simulation:
             self.pipeline.density_half(*args, self._half, self.state.drho)
         else:
             self.pipeline.density_rate(*args, self.state.drho)
+        self._run_hooks("after_density_rate")
 
     def time_step(self) -> float:
         if not self.adjust_time_step:

@@ -43,6 +43,7 @@ selected model that implements them; the engine names no model):
 ``before_evaluation(sim)``         before every evaluation of the pipeline (e.g. refresh ghosts)
 ``after_rates(sim)``               after every evaluation of the rates: may add a force to
                                    ``sim.state.ax, ay`` (e.g. a wall shear stress)
+``after_density_rate(sim)``        after every density-only pass: may add to ``sim.state.drho``
 ``walls_moved(sim, offsets, velocities)``  prescribed wall motion at a stage time
 ``after_step(sim)``                at the end of each step, before anything sees the state
 ``advection_velocity(sim, u, v)``  the velocity positions move with (e.g. XSPH); several are
@@ -61,7 +62,8 @@ __all__ = ["CaseContext", "PipelineModel", "Term", "HOOK_NAMES"]
 
 #: the run-time hooks above
 HOOK_NAMES = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
-              "before_evaluation", "after_rates", "walls_moved", "after_step",
+              "before_evaluation", "after_rates", "after_density_rate", "walls_moved",
+              "after_step",
               "advection_velocity", "summary")
 
 

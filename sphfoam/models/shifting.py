@@ -16,7 +16,12 @@ Both models share
 * the concentration gradient (``prepass`` stage, every evaluation; over every neighbour,
   walls included, so that a wall's particles fill the support), with the anti-clumping
   term of Monaghan (2000) as Lind et al. (2012) and Sun et al. (2017) write it,
-  grad C_a = sum_b (1 + R (W_ab / W(dx))^n) grad_a W_ab V_b, R = 0.2, n = 4;
+  grad C_a = sum_b (1 + R (W_ab / W(dx))^n) grad_a W_ab V_b, R = 0.2, n = 4, with
+  V_b = m_b / rho_b for fluid (and mirrored ghost) particles and V_b = dx^2 for wall particles:
+  a rigid wall lattice stands for dx^2 a particle whatever density the boundary model gives
+  it (evolved by the continuity equation for ``stationaryGhosts``, extrapolated for
+  ``adami``). With m_b / rho_b the bed's density noise (+-0.4 % by 0.5 s) drove a flow of
+  0.15 m/s along the bed of the still flume at d/dx = 20, before the wave arrived;
 * the surface rule: a fluid particle with lambda_a < ``surfaceLambda`` (0.75, Marrone et al.'s
   bound of the interior) or with such a fluid neighbour is near the surface and keeps only the
   tangential part of its shift, delta_u - (delta_u . n_a) n_a (as Lind et al. 2012 do), so the
@@ -64,6 +69,11 @@ class _ShiftCoeffs(Coeffs):
         "u_a, the first-order Taylor correction of Lind et al. (2012) written as the "
         "convective term of the ALE form (Sun et al. 2019); grad u_a = sum_b V_b (u_b - u_a) "
         "grad_a W_ab over fluid neighbours. no (the default): the shift moves positions only"))
+    correctDensity: bool = Field(False, description=(
+        "correct each fluid particle's density for its shift: drho_a/dt += delta_u_a . grad "
+        "rho_a (the same Taylor correction for the density; without it a particle shifted "
+        "down a hydrostatic column is too light for its new depth by rho0 g dz / c0^2); "
+        "grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid neighbours"))
 
 
 class ParticleShifting(PipelineModel):
@@ -124,16 +134,18 @@ shift_iwdx = 1.0 / (kern_w * kernel_f(shift_qdx))
 """
     _SHIFT_PAIR = """\
 shift_w = 1.0 + shift_r * (Wab * shift_iwdx) ** shift_n
-shift_cx += shift_w * gWx * mb / rhob
-shift_cy += shift_w * gWy * mb / rhob
+shift_vb = mb / rhob if kindb != WALL else shift_vw
+shift_cx += shift_w * gWx * shift_vb
+shift_cy += shift_w * gWy * shift_vb
 if kindb == FLUID and aux[I_shift_lambda, b] < shift_lam:
     shift_ns += 1.0
 """
     #: b's sums for the pair (b, a): grad_b W_ba = -gW@, V_a, and a near the surface (the
     #: anti-clumping factor shift_w is the pair's own, W_ba = W_ab)
     _SHIFT_REACTION = """\
-shift_cx_b -= shift_w * gWx * ma / rhoa
-shift_cy_b -= shift_w * gWy * ma / rhoa
+shift_va = ma / rhoa if kinda != WALL else shift_vw
+shift_cx_b -= shift_w * gWx * shift_va
+shift_cy_b -= shift_w * gWy * shift_va
 if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
     shift_ns_b += 1.0
 """
@@ -158,6 +170,28 @@ if kinda == FLUID:
     shift_guy_b -= u_ab * gWy * ma / rhoa
     shift_gvx_b -= v_ab * gWx * ma / rhoa
     shift_gvy_b -= v_ab * gWy * ma / rhoa
+"""
+    #: with correctDensity: grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid b (b's
+    #: sum from the pair (b, a): V_a (rho_a - rho_b) grad_b W_ba, the same sign)
+    _GRADRHO_INIT = """\
+shift_grx = 0.0
+shift_gry = 0.0
+"""
+    _GRADRHO_PAIR = """\
+if kindb == FLUID:
+    shift_grx += (rhob - rhoa) * gWx * mb / rhob
+    shift_gry += (rhob - rhoa) * gWy * mb / rhob
+"""
+    _GRADRHO_REACTION = """\
+if kinda == FLUID:
+    shift_grx_b += (rhob - rhoa) * gWx * ma / rhoa
+    shift_gry_b += (rhob - rhoa) * gWy * ma / rhoa
+"""
+    _GRADRHO_FINAL = """\
+if kind[a] == FLUID:
+    aux[I_shift_drho, a] = aux[I_shift_du, a] * shift_grx + aux[I_shift_dv, a] * shift_gry
+else:
+    aux[I_shift_drho, a] = 0.0
 """
     #: (delta_u . grad) u, the acceleration ``after_rates`` adds
     _GRADU_FINAL = """\
@@ -195,7 +229,8 @@ else:
         c = self.coeffs
         return {"shift_r": c.R, "shift_n": c.n, "shift_lam": c.surfaceLambda,
                 "shift_lamf": c.freeSurfaceLambda,
-                "shift_qdx": ctx.dx / ctx.h, **self.magnitude(ctx)}
+                "shift_qdx": ctx.dx / ctx.h, "shift_vw": ctx.dx * ctx.dx,
+                **self.magnitude(ctx)}
 
     def magnitude(self, ctx: CaseContext) -> dict[str, float]:
         return {}
@@ -216,6 +251,13 @@ else:
             final += self._GRADU_FINAL
             writes += ("aux.shift_ax", "aux.shift_ay")
             sums += ("shift_gux", "shift_guy", "shift_gvx", "shift_gvy")
+        if self.coeffs.correctDensity:
+            init += self._GRADRHO_INIT
+            pair += self._GRADRHO_PAIR
+            reaction += self._GRADRHO_REACTION
+            final += self._GRADRHO_FINAL
+            writes += ("aux.shift_drho",)
+            sums += ("shift_grx", "shift_gry")
         return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
                      pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
                      reads=("gradW",), writes=self._SURF),
@@ -231,14 +273,32 @@ else:
         dv = sim.aux[pipe.aux_index("shift_dv")]
         return add_correction(u, du, sim.state.kind), add_correction(v, dv, sim.state.kind)
 
-    def after_rates(self, sim):
-        """With ``correctVelocity``: du_a/dt += (delta_u_a . grad) u_a from the pre-pass of
-        this evaluation (zero for walls)."""
-        if not self.coeffs.correctVelocity:
-            return
+    # the corrections' hooks exist only where they are selected (a model the case does not
+    # select costs nothing: no call per evaluation)
+    @property
+    def after_rates(self):
+        c = self.coeffs
+        return self._add_rates if (c.correctVelocity or c.correctDensity) else None
+
+    @property
+    def after_density_rate(self):
+        return self._add_density_rate if self.coeffs.correctDensity else None
+
+    def _add_rates(self, sim):
+        """With ``correctVelocity``: du_a/dt += (delta_u_a . grad) u_a; with
+        ``correctDensity``: drho_a/dt += delta_u_a . grad rho_a; both from the pre-pass of this
+        evaluation (zero for walls)."""
         pipe, st = sim.pipeline, sim.state
-        add_rate(st.ax, sim.aux[pipe.aux_index("shift_ax")])
-        add_rate(st.ay, sim.aux[pipe.aux_index("shift_ay")])
+        if self.coeffs.correctVelocity:
+            add_rate(st.ax, sim.aux[pipe.aux_index("shift_ax")])
+            add_rate(st.ay, sim.aux[pipe.aux_index("shift_ay")])
+        if self.coeffs.correctDensity:
+            add_rate(st.drho, sim.aux[pipe.aux_index("shift_drho")])
+
+    def _add_density_rate(self, sim):
+        """With ``correctDensity``: the density-only pass gets delta_u . grad rho too, from
+        the last pre-pass (whose delta_u moved the particles since)."""
+        add_rate(sim.state.drho, sim.aux[sim.pipeline.aux_index("shift_drho")])
 
 
 @register
