@@ -76,6 +76,16 @@ class _ShiftCoeffs(Coeffs):
         "grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid neighbours"))
 
 
+def _mirrored(pair: str, init: str) -> str:
+    """The reaction of a gradient's pair code: b's sum for the pair (b, a). For a gradient
+    sum_b V_b (f_b - f_a) grad_a W_ab both factors change sign, so b's term is a's with b's
+    volume V_a and kind test: the sums (the names ``init`` sets) become their ``_b`` forms."""
+    out = pair.replace("kindb", "kinda").replace("mb / rhob", "ma / rhoa")
+    for name in (line.split("=")[0].strip() for line in init.splitlines() if "=" in line):
+        out = out.replace(f"{name} ", f"{name}_b ")
+    return out
+
+
 class ParticleShifting(PipelineModel):
     """Shared terms (see the module docstring); a subclass sets the magnitude ``_COEF``: the
     code of ``shift_k`` with delta_u_a = -shift_k grad C_a."""
@@ -149,8 +159,8 @@ shift_cy_b -= shift_w * gWy * shift_va
 if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
     shift_ns_b += 1.0
 """
-    #: with correctVelocity: grad u_a = sum_b V_b (u_b - u_a) grad_a W_ab over fluid b (and b's
-    #: sum from the pair (b, a): V_a (u_a - u_b) grad_b W_ba, the same sign)
+    #: with correctVelocity: grad u_a = sum_b V_b (u_b - u_a) grad_a W_ab over fluid b (b's sum
+    #: from the pair (b, a), V_a (u_a - u_b) grad_b W_ba, has the same sign: ``_mirrored``)
     _GRADU_INIT = """\
 shift_gux = 0.0
 shift_guy = 0.0
@@ -164,15 +174,8 @@ if kindb == FLUID:
     shift_gvx -= v_ab * gWx * mb / rhob
     shift_gvy -= v_ab * gWy * mb / rhob
 """
-    _GRADU_REACTION = """\
-if kinda == FLUID:
-    shift_gux_b -= u_ab * gWx * ma / rhoa
-    shift_guy_b -= u_ab * gWy * ma / rhoa
-    shift_gvx_b -= v_ab * gWx * ma / rhoa
-    shift_gvy_b -= v_ab * gWy * ma / rhoa
-"""
-    #: with correctDensity: grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid b (b's
-    #: sum from the pair (b, a): V_a (rho_a - rho_b) grad_b W_ba, the same sign)
+    #: with correctDensity: grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid b
+    #: (b's sum from the pair (b, a) has the same sign: ``_mirrored``)
     _GRADRHO_INIT = """\
 shift_grx = 0.0
 shift_gry = 0.0
@@ -181,11 +184,6 @@ shift_gry = 0.0
 if kindb == FLUID:
     shift_grx += (rhob - rhoa) * gWx * mb / rhob
     shift_gry += (rhob - rhoa) * gWy * mb / rhob
-"""
-    _GRADRHO_REACTION = """\
-if kinda == FLUID:
-    shift_grx_b += (rhob - rhoa) * gWx * ma / rhoa
-    shift_gry_b += (rhob - rhoa) * gWy * ma / rhoa
 """
     _GRADRHO_FINAL = """\
 if kind[a] == FLUID:
@@ -247,14 +245,14 @@ else:
         if self.coeffs.correctVelocity:
             init += self._GRADU_INIT
             pair += self._GRADU_PAIR
-            reaction += self._GRADU_REACTION
+            reaction += _mirrored(self._GRADU_PAIR, self._GRADU_INIT)
             final += self._GRADU_FINAL
             writes += ("aux.shift_ax", "aux.shift_ay")
             sums += ("shift_gux", "shift_guy", "shift_gvx", "shift_gvy")
         if self.coeffs.correctDensity:
             init += self._GRADRHO_INIT
             pair += self._GRADRHO_PAIR
-            reaction += self._GRADRHO_REACTION
+            reaction += _mirrored(self._GRADRHO_PAIR, self._GRADRHO_INIT)
             final += self._GRADRHO_FINAL
             writes += ("aux.shift_drho",)
             sums += ("shift_grx", "shift_gry")
