@@ -20,8 +20,10 @@ Both models share
   V_b = m_b / rho_b for fluid (and mirrored ghost) particles and V_b = dx^2 for wall particles:
   a rigid wall lattice stands for dx^2 a particle whatever density the boundary model gives
   it (evolved by the continuity equation for ``stationaryGhosts``, extrapolated for
-  ``adami``). With m_b / rho_b the bed's density noise (+-0.4 % by 0.5 s) drove a flow of
-  0.15 m/s along the bed of the still flume at d/dx = 20, before the wave arrived;
+  ``adami``). The anti-clumping term stirs still water: with R = 0.2 the still flume
+  moves at 7 cm/s rms above its bed at d/dx = 20 before the wave arrives, and the wave loses
+  4-5 % of its height over 16 m; R = 0 leaves the water still and the wave's height level,
+  but a thin sheet climbing a wall then breaks up (docs/low-dissipation.md);
 * the surface rule: a fluid particle with lambda_a < ``surfaceLambda`` (0.75, Marrone et al.'s
   bound of the interior) or with such a fluid neighbour is near the surface and keeps only the
   tangential part of its shift, delta_u - (delta_u . n_a) n_a (as Lind et al. 2012 do), so the
@@ -37,8 +39,8 @@ du_a/dt gains (delta_u_a . grad) u_a, the first-order Taylor correction of Lind 
 which is the convective term of the ALE equations of Sun, Colagrossi, Marrone, Antuono & Zhang
 (2019, CMAME 348) for particles moving with u + delta_u; grad u_a = sum_b V_b (u_b - u_a)
 grad_a W_ab over the fluid neighbours (walls' velocities are not the fluid's), summed in the same
-pre-pass as grad C. (Their density term delta_u . grad rho is left out: in a hydrostatic
-column it is rho0 g delta_v / c0^2, below the density diffusion's own error.)
+pre-pass as grad C. ``correctDensity yes`` adds their density term, drho_a/dt += delta_u_a .
+grad rho_a, the same way (in the rates and after the density-only pass).
 """
 
 from __future__ import annotations
@@ -53,7 +55,9 @@ from sphfoam.registry import Coeffs, register
 
 class _ShiftCoeffs(Coeffs):
     R: float = Field(0.2, ge=0.0, description="strength R of the anti-clumping term "
-                     "(1 + R (W_ab/W(dx))^n), 0.2 in Lind et al. 2012 and Sun et al. 2017")
+                     "(1 + R (W_ab/W(dx))^n), 0.2 in Lind et al. 2012 and Sun et al. 2017; "
+                     "0: none (still water stays still and a wave over a flat bed keeps its "
+                     "height, but a thin sheet climbing a wall breaks up)")
     n: float = Field(4.0, gt=0.0, description="exponent n of the anti-clumping term (4)")
     surfaceLambda: float = Field(0.75, ge=0.0, le=1.0, description=(
         "a fluid particle whose lambda (smallest eigenvalue of sum grad W (x) r_ba V_b) or a "
