@@ -80,12 +80,17 @@ class _ShiftCoeffs(Coeffs):
         "grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid neighbours"))
 
 
+def _sum_names(init: str) -> tuple[str, ...]:
+    """The per-particle sums an ``init`` code sets to zero."""
+    return tuple(line.split("=")[0].strip() for line in init.splitlines() if "=" in line)
+
+
 def _mirrored(pair: str, init: str) -> str:
     """The reaction of a gradient's pair code: b's sum for the pair (b, a). For a gradient
-    sum_b V_b (f_b - f_a) grad_a W_ab both factors change sign, so b's term is a's with b's
-    volume V_a and kind test: the sums (the names ``init`` sets) become their ``_b`` forms."""
-    out = pair.replace("kindb", "kinda").replace("mb / rhob", "ma / rhoa")
-    for name in (line.split("=")[0].strip() for line in init.splitlines() if "=" in line):
+    sum_b V_b (f_b - f_a) grad_a W_ab both factors change sign, so b's term is a's with a's
+    volume and kind test: the sums (the names ``init`` sets) become their ``_b`` forms."""
+    out = pair.replace("kindb", "kinda").replace("shift_vb", "shift_va")
+    for name in _sum_names(init):
         out = out.replace(f"{name} ", f"{name}_b ")
     return out
 
@@ -164,7 +169,8 @@ if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
     shift_ns_b += 1.0
 """
     #: with correctVelocity: grad u_a = sum_b V_b (u_b - u_a) grad_a W_ab over fluid b (b's sum
-    #: from the pair (b, a), V_a (u_a - u_b) grad_b W_ba, has the same sign: ``_mirrored``)
+    #: from the pair (b, a), V_a (u_a - u_b) grad_b W_ba, has the same sign: ``_mirrored``);
+    #: appended to ``_SHIFT_PAIR``, whose shift_vb (m_b / rho_b for a fluid b) it reads
     _GRADU_INIT = """\
 shift_gux = 0.0
 shift_guy = 0.0
@@ -173,10 +179,10 @@ shift_gvy = 0.0
 """
     _GRADU_PAIR = """\
 if kindb == FLUID:
-    shift_gux -= u_ab * gWx * mb / rhob
-    shift_guy -= u_ab * gWy * mb / rhob
-    shift_gvx -= v_ab * gWx * mb / rhob
-    shift_gvy -= v_ab * gWy * mb / rhob
+    shift_gux -= u_ab * gWx * shift_vb
+    shift_guy -= u_ab * gWy * shift_vb
+    shift_gvx -= v_ab * gWx * shift_vb
+    shift_gvy -= v_ab * gWy * shift_vb
 """
     #: with correctDensity: grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid b
     #: (b's sum from the pair (b, a) has the same sign: ``_mirrored``)
@@ -186,8 +192,8 @@ shift_gry = 0.0
 """
     _GRADRHO_PAIR = """\
 if kindb == FLUID:
-    shift_grx += (rhob - rhoa) * gWx * mb / rhob
-    shift_gry += (rhob - rhoa) * gWy * mb / rhob
+    shift_grx += (rhob - rhoa) * gWx * shift_vb
+    shift_gry += (rhob - rhoa) * gWy * shift_vb
 """
     _GRADRHO_FINAL = """\
 if kind[a] == FLUID:
@@ -252,14 +258,14 @@ else:
             reaction += _mirrored(self._GRADU_PAIR, self._GRADU_INIT)
             final += self._GRADU_FINAL
             writes += ("aux.shift_ax", "aux.shift_ay")
-            sums += ("shift_gux", "shift_guy", "shift_gvx", "shift_gvy")
+            sums += _sum_names(self._GRADU_INIT)
         if self.coeffs.correctDensity:
             init += self._GRADRHO_INIT
             pair += self._GRADRHO_PAIR
             reaction += _mirrored(self._GRADRHO_PAIR, self._GRADRHO_INIT)
             final += self._GRADRHO_FINAL
             writes += ("aux.shift_drho",)
-            sums += ("shift_grx", "shift_gry")
+            sums += _sum_names(self._GRADRHO_INIT)
         return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
                      pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
                      reads=("gradW",), writes=self._SURF),
