@@ -140,6 +140,12 @@ CASE_DIRS = {
     "wallBare": REPO / "tutorials" / "solitaryWallRunup",
     # flumeLowDiss with the shift's velocity correction (particleShifting correctVelocity)
     "flumeLowDissCv": REPO / "tutorials" / "solitaryWave",
+    # flumeLowDiss with the anti-clumping term only near the free surface (R 0, surfaceR 0.2)
+    "flumeLowDissRs": REPO / "tutorials" / "solitaryWave",
+    # P's wall case with the flume's low-dissipation combination (studyDict.lowDissipation's
+    # fourtakasQRs: quartic kernel, Fourtakas's delta-SPH, delta+ shifting R 0 / surfaceR 0.2,
+    # no XSPH, no MLS, the hydrostatic mirrored bed)
+    "wallLowDiss": REPO / "tutorials" / "solitaryWallRunup",
 }
 #: dictionary edits of a --case beyond the size (``clone_case`` syntax)
 CASE_EDITS = {
@@ -157,6 +163,22 @@ CASE_EDITS = {
                                                  "gamma": 7},
         "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1,
                                                     "correctVelocity": True},
+    },
+    "flumeLowDissRs": {
+        "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
+                                                 "gamma": 7},
+        "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1,
+                                                    "R": 0.0, "surfaceR": 0.2},
+    },
+    "wallLowDiss": {
+        "constant/sphProperties:kernel": {"type": "quartic", "hdx": 1.3},
+        "constant/sphProperties:velocityCorrection": {"type": "none"},
+        "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
+                                                 "gamma": 7},
+        "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1,
+                                                    "R": 0.0, "surfaceR": 0.2},
+        "constant/sphProperties:boundary": {"type": "mirrorGhosts", "noSlip": False,
+                                            "pressure": "hydrostatic"},
     },
     "wallBare": {
         "constant/sphProperties:velocityCorrection": {"type": "none"},

@@ -84,7 +84,8 @@ def test_collision_study_clones_into_valid_cases(tmp_path):
     low-dissipation combinations, all measured against the exact wave's celerity."""
     base = _copy(tmp_path, "solitaryCollision")
     s = st.load(base / "studyDict.lowDissipation")
-    assert [r.name for r in s.runs] == ["P", "fourtakas", "fourtakasR0", "fourtakasR005"]
+    assert [r.name for r in s.runs] == ["P", "fourtakas", "fourtakasR0", "fourtakasR005",
+                                         "fourtakasQ", "fourtakasQRs"]
     st.prepare(s)
     for run in s.runs:
         m = foamdict.read(Path(run.path) / "system" / "metricsDict")["metrics"]

@@ -335,3 +335,31 @@ def test_density_correction_adds_the_shift_along_the_density_gradient(dplus):
     sim.density_rate()
     plain.density_rate()
     assert np.allclose(st.drho - plain.state.drho, got, rtol=0, atol=tol)
+
+
+def test_surface_r_weighs_the_anti_clumping_term_only_near_the_surface(dplus):
+    """surfaceR: a particle near the free surface (the surface rule's set) gets the shift of
+    R = surfaceR, every other one that of R. With R 0, surfaceR 0.2 on a perturbed slab the
+    surface rows' shifts are the paper's (dplus, R 0.2) and the middle rows' those of R 0;
+    the two differ there, so the check can fail."""
+    x, y = lattice(rows=10, y0=0.5 * L)
+    rng = np.random.default_rng(7)
+    x = x + rng.uniform(-0.15, 0.15, x.size) * DX
+    y = y + rng.uniform(-0.1, 0.1, x.size) * DX
+    split = Box({"type": "deltaPlusShifting", "R": 0.0, "surfaceR": 0.2})
+    bulk = Box({"type": "deltaPlusShifting", "R": 0.0})
+    assert split.sel.particleShifting._split and not bulk.sel.particleShifting._split
+    sims = [b.sim(x, y) for b in (split, dplus, bulk)]
+    assert all(np.array_equal(s.state.x, sims[0].state.x) for s in sims)
+    (du_s, dv_s), (du_p, dv_p), (du_0, dv_0) = (b.shift(s) for b, s in
+                                                zip((split, dplus, bulk), sims))
+    scale = np.abs(np.concatenate([du_p, dv_p])).max()
+    as_paper = (np.abs(du_s - du_p) < 1e-9 * scale) & (np.abs(dv_s - dv_p) < 1e-9 * scale)
+    as_bulk = (np.abs(du_s - du_0) < 1e-9 * scale) & (np.abs(dv_s - dv_0) < 1e-9 * scale)
+    st = sims[0].state
+    mid = np.abs(st.y - (0.5 * L + 5 * DX)) < 1.2 * DX
+    rim = np.abs(st.y - (0.5 * L + 5 * DX)) > 3.4 * DX             # the two outer rows
+    assert np.all(as_paper | as_bulk)
+    assert np.all(as_paper[rim]) and np.all(as_bulk[mid])
+    assert not np.any(as_paper[mid] & as_bulk[mid])                # R matters there
+    assert not np.any(as_paper[rim] & as_bulk[rim])

@@ -23,7 +23,10 @@ Both models share
   ``adami``). The anti-clumping term stirs still water: with R = 0.2 the still flume
   moves at 7 cm/s rms above its bed at d/dx = 20 before the wave arrives, and the wave loses
   4-5 % of its height over 16 m; R = 0 leaves the water still and the wave's height level,
-  but a thin sheet climbing a wall then breaks up (docs/low-dissipation.md);
+  but a thin sheet climbing a wall then breaks up (docs/low-dissipation.md). ``surfaceR``
+  weighs the term by its own R for a particle near the free surface (the surface rule's set
+  below) and by R elsewhere: the anti-clumping part sum_b (W_ab/W(dx))^n grad_a W_ab V_b is
+  then summed apart from the plain gradient and added with the particle's R at the end;
 * the surface rule: a fluid particle with lambda_a < ``surfaceLambda`` (0.75, Marrone et al.'s
   bound of the interior) or with such a fluid neighbour is near the surface and keeps only the
   tangential part of its shift, delta_u - (delta_u . n_a) n_a (as Lind et al. 2012 do), so the
@@ -58,6 +61,10 @@ class _ShiftCoeffs(Coeffs):
                      "(1 + R (W_ab/W(dx))^n), 0.2 in Lind et al. 2012 and Sun et al. 2017; "
                      "0: none (still water stays still and a wave over a flat bed keeps its "
                      "height, but a thin sheet climbing a wall breaks up)")
+    surfaceR: float | None = Field(None, ge=0.0, description=(
+        "R for a particle near the free surface (the surface rule's particles: a thin sheet, "
+        "the surface rows); R elsewhere. Unset (the default): R everywhere. R 0 with surfaceR "
+        "0.2 keeps still water still and a wall-bound sheet together"))
     n: float = Field(4.0, gt=0.0, description="exponent n of the anti-clumping term (4)")
     surfaceLambda: float = Field(0.75, ge=0.0, le=1.0, description=(
         "a fluid particle whose lambda (smallest eigenvalue of sum grad W (x) r_ba V_b) or a "
@@ -159,6 +166,36 @@ shift_cy += shift_w * gWy * shift_vb
 if kindb == FLUID and aux[I_shift_lambda, b] < shift_lam:
     shift_ns += 1.0
 """
+    #: with ``surfaceR``: the plain gradient and the anti-clumping part summed apart, so that
+    #: the final code weighs the latter with R or surfaceR by whether a is near the surface
+    _SPLIT_INIT = """\
+shift_kx = 0.0
+shift_ky = 0.0
+"""
+    _SPLIT_PAIR = """\
+shift_w = (Wab * shift_iwdx) ** shift_n
+shift_vb = mb / rhob if kindb != WALL else shift_vw
+shift_cx += gWx * shift_vb
+shift_cy += gWy * shift_vb
+shift_kx += shift_w * gWx * shift_vb
+shift_ky += shift_w * gWy * shift_vb
+if kindb == FLUID and aux[I_shift_lambda, b] < shift_lam:
+    shift_ns += 1.0
+"""
+    _SPLIT_REACTION = """\
+shift_va = ma / rhoa if kinda != WALL else shift_vw
+shift_cx_b -= gWx * shift_va
+shift_cy_b -= gWy * shift_va
+shift_kx_b -= shift_w * gWx * shift_va
+shift_ky_b -= shift_w * gWy * shift_va
+if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
+    shift_ns_b += 1.0
+"""
+    _SPLIT_FINAL = """\
+shift_ra = shift_rs if shift_near else shift_r
+shift_cx += shift_ra * shift_kx
+shift_cy += shift_ra * shift_ky
+"""
     #: b's sums for the pair (b, a): grad_b W_ba = -gW@, V_a, and a near the surface (the
     #: anti-clumping factor shift_w is the pair's own, W_ba = W_ab)
     _SHIFT_REACTION = """\
@@ -212,7 +249,7 @@ else:
 """
     _SHIFT_FINAL = """\
 shift_near = shift_ns > 0.0 or aux[I_shift_lambda, a] < shift_lam
-if kind[a] == FLUID:
+{split}if kind[a] == FLUID:
 {coef}
     shift_du = -shift_k * shift_cx
     shift_dv = -shift_k * shift_cy
@@ -235,7 +272,8 @@ else:
 
     def params(self, ctx: CaseContext):
         c = self.coeffs
-        return {"shift_r": c.R, "shift_n": c.n, "shift_lam": c.surfaceLambda,
+        return {"shift_r": c.R, "shift_rs": c.R if c.surfaceR is None else c.surfaceR,
+                "shift_n": c.n, "shift_lam": c.surfaceLambda,
                 "shift_lamf": c.freeSurfaceLambda,
                 "shift_qdx": ctx.dx / ctx.h, "shift_vw": ctx.dx * ctx.dx,
                 **self.magnitude(ctx)}
@@ -244,14 +282,21 @@ else:
         return {}
 
     def terms(self):
-        final = self._SHIFT_FINAL.replace("{coef}", "    " + self._COEF)
+        split = self._split
+        final = (self._SHIFT_FINAL.replace("{coef}", "    " + self._COEF)
+                 .replace("{split}", self._SPLIT_FINAL if split else ""))
         # an integer exponent n (4, the default) written as a literal: numba then multiplies
         # (about 2 ns per pair) instead of calling pow (about 20 ns)
         n = self.coeffs.n
-        pair = (self._SHIFT_PAIR.replace("** shift_n", f"** {int(n)}")
-                if float(n).is_integer() and 1 <= n <= 16 else self._SHIFT_PAIR)
+        pair = self._SPLIT_PAIR if split else self._SHIFT_PAIR
+        if float(n).is_integer() and 1 <= n <= 16:
+            pair = pair.replace("** shift_n", f"** {int(n)}")
         init, reaction, writes = self._SHIFT_INIT, self._SHIFT_REACTION, self._DU
         sums = ("shift_cx", "shift_cy", "shift_ns")
+        if split:
+            init += self._SPLIT_INIT
+            reaction = self._SPLIT_REACTION
+            sums += _sum_names(self._SPLIT_INIT)
         if self.coeffs.correctVelocity:
             init += self._GRADU_INIT
             pair += self._GRADU_PAIR
@@ -273,6 +318,12 @@ else:
                      pair=pair, final=final, applies=("all",), sees=("all",),
                      reads=("W", "gradW", *self._SURF), writes=writes,
                      reaction=reaction, sums=sums)]
+
+    @property
+    def _split(self) -> bool:
+        """True where ``surfaceR`` differs from R: the anti-clumping part is summed apart."""
+        c = self.coeffs
+        return c.surfaceR is not None and c.surfaceR != c.R
 
     def advection_velocity(self, sim, u, v):
         """Positions move with (u, v) + delta_u of the last pre-pass (walls: unchanged)."""
