@@ -132,6 +132,9 @@ CASE_DIRS = {
     "wall": REPO / "tutorials" / "solitaryWallRunup",
     # the same with XSPH's velocity once per step (velocityCorrection evaluation oncePerStep)
     "wallOnce": REPO / "tutorials" / "solitaryWallRunup",
+    # the wall case with P's own time integration, the predictor-corrector P(37)-(38), for
+    # the tutorial's monaghan2007 (two evaluations a step, no density-only pass)
+    "wallPC": REPO / "tutorials" / "solitaryWallRunup",
     # the flume with issue 13's low-dissipation set-up (studyDict.lowDissipation's
     # fourtakasShift: Fourtakas's delta-SPH and delta+ shifting in place of Shepard)
     "flumeLowDiss": REPO / "tutorials" / "solitaryWave",
@@ -152,6 +155,9 @@ CASE_EDITS = {
     "wallOnce": {
         "constant/sphProperties:velocityCorrection": {"type": "xsph", "epsilon": 0.5,
                                                       "evaluation": "oncePerStep"},
+    },
+    "wallPC": {
+        "system/sphSchemes:integrator": {"type": "predictorCorrector"},
     },
     "flumeLowDiss": {
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
