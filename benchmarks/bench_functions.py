@@ -28,7 +28,8 @@ if sim._half is not None and p.rates_half is not None:
 fns["rates"] = lambda: p.rates(*args, st.ax, st.ay, st.drho, st.sigma)
 if sim._half is not None and p.density_half is not None:
     fns["density_half"] = lambda: p.density_half(*args, sim._half, st.drho)
-fns["nlist"] = lambda: p.neighbour_list(st.x, st.y, sim.cells, sim.cells.cell_size, *sim._nb)
+fns["nlist"] = lambda: p.neighbour_list(st.x, st.y, st.kind, sim.cells, sim.cells.cell_size,
+                                        *sim._nb)
 if sim._half is not None:
     fns["half_lists"] = lambda: p.half_lists(*sim._nb, sim.cells, sim._half)
 if p.step_pass is not None:

@@ -333,3 +333,50 @@ def test_the_reused_neighbour_list_holds_every_pair_at_every_evaluation(tutorial
         sim.step()
     assert sim.list_reused > sim.list_built > 3     # the flow moved: rebuilt, and reused
     assert len(checked) == 2 * 400 and min(checked) > 0
+
+
+def test_pairs_of_two_non_fluid_particles_are_left_out_only_where_no_term_reads_them(tutorial):
+    """P's wall case (mirror ghosts, XSPH): no term keeps what a pair of two ghosts adds, so
+    the list leaves those pairs out (Assembly.fluid_pairs_only) and still holds every pair
+    within the support with a fluid particle; 30 steps give bitwise the state of the full
+    list. The dam break's wall particles sum their continuity over wall neighbours too: its
+    list keeps them."""
+    import dataclasses
+
+    from scipy.spatial import cKDTree
+
+    from sphfoam import runner
+    from sphfoam.case.case import Case
+    from sphfoam.engine.state import ParticleState
+    from sphfoam.io.fields import read_state
+
+    def build(name, edits):
+        d = tutorial(name, {"system/controlDict:functions": {}, **edits})
+        case = Case(d)
+        runner.setup_case(case, log=lambda *_: None)
+        return runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+
+    wall = {"system/particleDict:dx": 1.25, "system/controlDict:endTime": 1.0}
+    sims = [build("solitaryWallRunup", wall) for _ in range(2)]
+    assert sims[0].pipeline.fluid_pairs_only
+    sims[1].pipeline = dataclasses.replace(sims[1].pipeline, fluid_pairs_only=False)
+    for _ in range(30):
+        for s in sims:
+            s.step()
+    a, b = (s.state for s in sims)
+    assert a.n == b.n and sims[0].list_built > 1
+    for f in ("x", "y", "u", "v", "rho"):
+        assert np.array_equal(getattr(a, f), getattr(b, f)), f
+    (start, idx), (start_f, _) = sims[0]._nb, sims[1]._nb
+    owner = np.repeat(np.arange(a.n), np.diff(start))
+    listed = idx[:start[-1]].astype(np.int64)
+    fluid = a.kind == 0
+    assert np.all(fluid[owner] | fluid[listed])                 # no pair of two non-fluid
+    assert start[-1] < 0.97 * start_f[-1]                      # ... and there were some
+    pairs = cKDTree(np.column_stack([a.x, a.y])).query_pairs(
+        sims[0].pipeline.support_radius * (1 - 1e-9), output_type="ndarray")
+    pairs = pairs[fluid[pairs[:, 0]] | fluid[pairs[:, 1]]]
+    want = np.concatenate([pairs[:, 0] * a.n + pairs[:, 1], pairs[:, 1] * a.n + pairs[:, 0]])
+    assert np.isin(want, owner * a.n + listed).all()
+    dam = build("damBreak", {"system/particleDict:dx": 0.05})
+    assert not dam.pipeline.fluid_pairs_only

@@ -219,8 +219,8 @@ class Simulation:
         self._run_hooks("after_sort", order)
         # one neighbour list for every loop of the step: within the cell side, so a pair that
         # comes within the support during the step is in it (the margin cellSizeFactor - 1)
-        self._nb = self.pipeline.neighbour_list(st.x, st.y, self.cells, self.cells.cell_size,
-                                                *self._nb)
+        self._nb = self.pipeline.neighbour_list(st.x, st.y, st.kind, self.cells,
+                                                self.cells.cell_size, *self._nb)
         self._ref = (st.x.copy(), st.y.copy())
         self.list_built += 1
         self._half = (self.pipeline.half_lists(*self._nb, self.cells, self._half)

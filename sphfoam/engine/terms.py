@@ -134,6 +134,11 @@ class Term:
     #: ``evaluation oncePerStep``); False (the default) when afresh before every evaluation.
     #: The prepass is one loop: its terms must agree
     per_step: bool = False
+    #: True when what the term sums for a non-fluid particle a is discarded (its ``final``
+    #: code writes a fixed value for such a particle, e.g. XSPH's dv = 0 for walls): a pair
+    #: of two non-fluid particles then adds nothing this term keeps, and the neighbour list
+    #: may leave such pairs out (``Assembly.fluid_pairs_only``)
+    nonfluid_discarded: bool = False
     #: a pair force coefficient F_ab equal to F_ba (an expression of the pair and of
     #: a's ``init`` names): the term adds -m_b F_ab grad_a W_ab to dv_a/dt and, over half
     #: lists, +m_a F_ab grad_a W_ab to dv_b/dt. Its ``pair`` and ``reaction`` code are

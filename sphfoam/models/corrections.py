@@ -122,7 +122,8 @@ vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
         return [Term("xsphVelocity", ("prepass",), init=self._INIT, pair=self._PAIR,
                      final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
                      writes=self._DV, reaction=self._REACTION, sums=("xsph_su", "xsph_sv"),
-                     per_step=self.coeffs.evaluation == "oncePerStep"),
+                     per_step=self.coeffs.evaluation == "oncePerStep",
+                     nonfluid_discarded=True),                  # walls: dv = 0
                 Term("xsphContinuity", ("rates", "density"), pair=self._UC,
                      applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",),
                      parity="odd")]

@@ -317,7 +317,8 @@ else:
                 Term("shiftingVector", ("prepass",), init=init,
                      pair=pair, final=final, applies=("all",), sees=("all",),
                      reads=("W", "gradW", *self._SURF), writes=writes,
-                     reaction=reaction, sums=sums)]
+                     reaction=reaction, sums=sums,
+                     nonfluid_discarded=True)]                   # walls are not shifted
 
     @property
     def _split(self) -> bool:
