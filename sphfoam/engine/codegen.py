@@ -356,8 +356,8 @@ class Assembly:
     def fluid_pairs_only(self) -> bool:
         """Whether the neighbour list may leave out pairs of two non-fluid particles: no
         selected term with pair code runs for a non-fluid particle, sees non-fluid
-        neighbours and keeps what it sums there (``Term.nonfluid_discarded``). Such pairs
-        are 7-8 % of a list at 3 wall rows; for the others every term adds nothing."""
+        neighbours and keeps what it sums there (``Term.nonfluid_discarded``): no term
+        then keeps anything such a pair adds (7 % of the pairs of P's wall case)."""
         nonfluid = {"all", "wall"} | ({"wetWall"} if "wetWall" in self.kinds else set())
         for t in self.terms:
             if t.on_demand or t.nonfluid_discarded or not t.pair:
