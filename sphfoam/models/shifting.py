@@ -297,20 +297,19 @@ else:
             init += self._SPLIT_INIT
             reaction = self._SPLIT_REACTION
             sums += _sum_names(self._SPLIT_INIT)
-        if self.coeffs.correctVelocity:
-            init += self._GRADU_INIT
-            pair += self._GRADU_PAIR
-            reaction += _mirrored(self._GRADU_PAIR, self._GRADU_INIT)
-            final += self._GRADU_FINAL
-            writes += ("aux.shift_ax", "aux.shift_ay")
-            sums += _sum_names(self._GRADU_INIT)
-        if self.coeffs.correctDensity:
-            init += self._GRADRHO_INIT
-            pair += self._GRADRHO_PAIR
-            reaction += _mirrored(self._GRADRHO_PAIR, self._GRADRHO_INIT)
-            final += self._GRADRHO_FINAL
-            writes += ("aux.shift_drho",)
-            sums += _sum_names(self._GRADRHO_INIT)
+        # the corrections' gradients: sums of their own in the same pre-pass
+        for on, g_init, g_pair, g_final, g_writes in (
+                (self.coeffs.correctVelocity, self._GRADU_INIT, self._GRADU_PAIR,
+                 self._GRADU_FINAL, ("aux.shift_ax", "aux.shift_ay")),
+                (self.coeffs.correctDensity, self._GRADRHO_INIT, self._GRADRHO_PAIR,
+                 self._GRADRHO_FINAL, ("aux.shift_drho",))):
+            if on:
+                init += g_init
+                pair += g_pair
+                reaction += _mirrored(g_pair, g_init)
+                final += g_final
+                writes += g_writes
+                sums += _sum_names(g_init)
         return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
                      pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
                      reads=("gradW",), writes=self._SURF),
