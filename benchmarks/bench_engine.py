@@ -135,6 +135,9 @@ CASE_DIRS = {
     # the wall case with P's own time integration, the predictor-corrector P(37)-(38), for
     # the tutorial's monaghan2007 (two evaluations a step, no density-only pass)
     "wallPC": REPO / "tutorials" / "solitaryWallRunup",
+    # wallPC with XSPH's velocity once per step, from the step's first state (the issue's
+    # "XSPH's velocity computed once per step where the integrator allows it")
+    "wallPCOnce": REPO / "tutorials" / "solitaryWallRunup",
     # the flume with issue 13's low-dissipation set-up (studyDict.lowDissipation's
     # fourtakasShift: Fourtakas's delta-SPH and delta+ shifting in place of Shepard)
     "flumeLowDiss": REPO / "tutorials" / "solitaryWave",
@@ -158,6 +161,11 @@ CASE_EDITS = {
     },
     "wallPC": {
         "system/sphSchemes:integrator": {"type": "predictorCorrector"},
+    },
+    "wallPCOnce": {
+        "system/sphSchemes:integrator": {"type": "predictorCorrector"},
+        "constant/sphProperties:velocityCorrection": {"type": "xsph", "epsilon": 0.5,
+                                                      "evaluation": "oncePerStep"},
     },
     "flumeLowDiss": {
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,

@@ -25,6 +25,9 @@ if p.prepass is not None:
     fns["prepass"] = lambda: p.prepass(*args)
 if sim._half is not None and p.rates_half is not None:
     fns["rates_half"] = lambda: p.rates_half(*args, sim._half, st.ax, st.ay, st.drho, st.sigma)
+    # without sigma, T(3.89): the evaluations an integrator takes no time step from
+    fns["rates_half-s"] = lambda: p.rates_half(*args, sim._half, st.ax, st.ay, st.drho,
+                                               st.sigma[:0])
 fns["rates"] = lambda: p.rates(*args, st.ax, st.ay, st.drho, st.sigma)
 if sim._half is not None and p.density_half is not None:
     fns["density_half"] = lambda: p.density_half(*args, sim._half, st.drho)

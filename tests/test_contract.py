@@ -380,3 +380,49 @@ def test_pairs_of_two_non_fluid_particles_are_left_out_only_where_no_term_reads_
     assert np.isin(want, owner * a.n + listed).all()
     dam = build("damBreak", {"system/particleDict:dx": 0.05})
     assert not dam.pipeline.fluid_pairs_only
+
+
+@pytest.mark.parametrize("name, edits", [
+    ("solitaryWallRunup", {"system/particleDict:dx": 1.25, "system/controlDict:endTime": 1.0,
+                           "system/sphSchemes:integrator": {"type": "predictorCorrector"}}),
+    ("damBreak", {"system/particleDict:dx": 0.05,
+                  "system/sphSchemes:integrator": {"type": "symplectic"}}),
+])
+def test_an_evaluation_no_time_step_is_taken_from_skips_sigma(tutorial, name, edits):
+    """predictorCorrector and symplectic take dt from the step's first evaluation only
+    (``time_step_from_first_evaluation``): the mid-step evaluation skips sigma of T(3.89).
+    30 steps give bitwise the state of evaluations that all compute it, and state.sigma is
+    the first evaluation's."""
+    from sphfoam import runner
+    from sphfoam.case.case import Case
+    from sphfoam.engine.state import ParticleState
+    from sphfoam.io.fields import read_state
+
+    def build():
+        d = tutorial(name, {"system/controlDict:functions": {}, **edits})
+        case = Case(d)
+        runner.setup_case(case, log=lambda *_: None)
+        return runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+
+    skip, full = build(), build()
+    assert skip.integrator.time_step_from_first_evaluation
+    full.integrator.time_step_from_first_evaluation = False
+    first = []
+    rates = skip.rates
+
+    def recording():
+        wrote = skip._evaluations == 0
+        rates()
+        if wrote:
+            first.append(skip.state.sigma.copy())
+
+    skip.rates = recording
+    for _ in range(30):
+        skip.step()
+        full.step()
+        assert np.array_equal(skip.state.sigma, first[-1])
+    assert len(first) == 30
+    a, b = skip.state, full.state
+    for f in ("x", "y", "u", "v", "rho"):
+        assert np.array_equal(getattr(a, f), getattr(b, f)), f
+    assert not np.array_equal(a.sigma, b.sigma)    # the full one's is the mid-step's

@@ -158,8 +158,9 @@ ca = c[a]
 #: T(3.89) with the (0.1 h)^2 guard of Monaghan (1992) that T(3.32) uses: without it a pair
 #: closing to r -> 0 (a particle meeting its own mirror image at a wall) collapses the step
 _SIGMA = """\
-s_ab = abs(h * vdotr / (r2 + eta2))
-sigma_a = max(sigma_a, s_ab)
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    sigma_a = max(sigma_a, s_ab)
 """
 
 #: the 3 x 3 cell walk around particle ``a``, run once per step to build the neighbour list
@@ -233,29 +234,33 @@ for k in range(half[a], nb_start[a + 1]):
 
 #: T(3.89) in the half-list loop: s_ab is the same for (a, b) and (b, a); fluid particles only
 _SIGMA_HALF = """\
-s_ab = abs(h * vdotr / (r2 + eta2))
-if kinda == FLUID:
-    sigma_a = max(sigma_a, s_ab)
-if kindb == FLUID:
-    out_sigma[b] = max(out_sigma[b], s_ab)"""
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    if kinda == FLUID:
+        sigma_a = max(sigma_a, s_ab)
+    if kindb == FLUID:
+        out_sigma[b] = max(out_sigma[b], s_ab)"""
 #: T(3.89) where the boundary keeps massless (dormant) particles in the list
 #: (``Boundary.massless_ghosts``): a neighbour of mass 0 is no neighbour, in this maximum as
 #: in every mass-weighted sum
 _SIGMA_MASSIVE = """\
-s_ab = abs(h * vdotr / (r2 + eta2)) if mb > 0.0 else 0.0
-sigma_a = max(sigma_a, s_ab)
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2)) if mb > 0.0 else 0.0
+    sigma_a = max(sigma_a, s_ab)
 """
 _SIGMA_HALF_MASSIVE = """\
-s_ab = abs(h * vdotr / (r2 + eta2))
-if kinda == FLUID and mb > 0.0:
-    sigma_a = max(sigma_a, s_ab)
-if kindb == FLUID and ma > 0.0:
-    out_sigma[b] = max(out_sigma[b], s_ab)"""
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    if kinda == FLUID and mb > 0.0:
+        sigma_a = max(sigma_a, s_ab)
+    if kindb == FLUID and ma > 0.0:
+        out_sigma[b] = max(out_sigma[b], s_ab)"""
 #: the same for a fluid pair
 _SIGMA_FF = """\
-s_ab = abs(h * vdotr / (r2 + eta2))
-sigma_a = max(sigma_a, s_ab)
-out_sigma[b] = max(out_sigma[b], s_ab)"""
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    sigma_a = max(sigma_a, s_ab)
+    out_sigma[b] = max(out_sigma[b], s_ab)"""
 
 
 class Assembly:
@@ -941,8 +946,10 @@ def prepass({_ARGS}):
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
-    """dv/dt, drho/dt and sigma of T(3.89) for every particle (gather over neighbours)."""
+    """dv/dt, drho/dt and sigma of T(3.89) for every particle (gather over neighbours);
+    an empty out_sigma: no sigma (an evaluation whose time step is not taken from it)."""
 {_block(bind, 4)}
+    want_sigma = out_sigma.shape[0] > 0
     for a in prange(x.shape[0]):
 {_block(_PARTICLE_LOAD, 8)}
         acc_x = 0.0
@@ -958,7 +965,8 @@ def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
         out_ax[a] = acc_x
         out_ay[a] = acc_y
         out_drho[a] = drho_a
-        out_sigma[a] = sigma_a
+        if want_sigma:
+            out_sigma[a] = sigma_a
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
@@ -1027,15 +1035,19 @@ def density_filter({_ARGS}, out_rho):
         body = asm.half_loop(stage, sigma=stage == "rates" and sel.adjust_time_step)
         if body is None:
             continue
-        zero = "\n".join(f"{o}[a] = 0.0" for o in outs.split(", "))
+        zero = "\n".join(f"{o}[a] = 0.0" for o in outs.split(", ") if o != "out_sigma")
         if stage == "rates":
+            zero += "\nif want_sigma:\n    out_sigma[a] = 0.0"
             start = "acc_x = 0.0\nacc_y = 0.0\ndrho_a = 0.0\nsigma_a = 0.0"
             end = ("if kinda == FLUID:\n    acc_x += gx\n    acc_y += gy\n"
                    "out_ax[a] += acc_x\nout_ay[a] += acc_y\nout_drho[a] += drho_a\n"
-                   "if sigma_a > out_sigma[a]:\n    out_sigma[a] = sigma_a")
+                   "if want_sigma and sigma_a > out_sigma[a]:\n    out_sigma[a] = sigma_a")
         else:
             start = "drho_a = 0.0"
             end = "out_drho[a] += drho_a"
+        want = "\n    want_sigma = out_sigma.shape[0] > 0" if stage == "rates" else ""
+        sigma_doc = ("\n    An empty out_sigma: no sigma (an evaluation whose time step is not "
+                     "taken from it).") if stage == "rates" else ""
         parts.append(f'''
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
@@ -1044,8 +1056,8 @@ def {name}({_ARGS}, half, {outs}):
     listed pair a < b once, for both particles (the terms' reactions). half[a] (a < n) is
     where the neighbours b > a start in a's list and half[n + i] the first particle of band
     i (consecutive cell rows): the bands run in two colours, so that no two threads write
-    the same particle (a's neighbours b > a lie in a's band or the next)."""
-{_block(bind, 4)}
+    the same particle (a's neighbours b > a lie in a's band or the next).{sigma_doc}"""
+{_block(bind, 4)}{want}
     for a in prange(x.shape[0]):
 {_block(zero, 8)}
 {_block(_half_bands(start, body, end), 4)}

@@ -107,6 +107,8 @@ class Simulation:
         self._sums = None
         #: in a step: whether its prepass ran (``Pipeline.prepass_once``); None outside a step
         self._prepassed = None
+        #: rates evaluations so far in the step being taken (None outside a step)
+        self._evaluations = None
         #: per-range partial results of the whole-state reductions (no allocation per step)
         self._reduce = np.empty((3, REDUCTION_CHUNKS))
         #: positions at the last build of the list (None: rebuild at the next step)
@@ -294,14 +296,23 @@ class Simulation:
             self.pipeline.step_pass(*self._grid_args())
 
     def rates(self):
+        """dv/dt and drho/dt of every particle, and sigma of T(3.89) where a time step may be
+        taken from it: not in the later evaluations of a step of an integrator that says
+        ``time_step_from_first_evaluation`` (``state.sigma`` keeps the first's)."""
         st = self.state
         self._run_hooks("before_evaluation")
         args = self._grid_args()
         self._prepass(args)
+        sigma = True
+        if self._evaluations is not None:
+            sigma = self._evaluations == 0 or not getattr(
+                self.integrator, "time_step_from_first_evaluation", False)
+            self._evaluations += 1
+        out_sigma = st.sigma if sigma else st.sigma[:0]
         if self.half_lists and self._half is not None and self.pipeline.rates_half is not None:
-            self.pipeline.rates_half(*args, self._half, st.ax, st.ay, st.drho, st.sigma)
+            self.pipeline.rates_half(*args, self._half, st.ax, st.ay, st.drho, out_sigma)
         else:
-            self.pipeline.rates(*args, st.ax, st.ay, st.drho, st.sigma)
+            self.pipeline.rates(*args, st.ax, st.ay, st.drho, out_sigma)
         self._run_hooks("after_rates")
 
     def density_rate(self):
@@ -334,10 +345,12 @@ class Simulation:
         if self.filtered:
             self.filter_density()
         self._prepassed = False
+        self._evaluations = 0
         try:
             dt = self.integrator.step(self, dt_remaining)
         finally:
             self._prepassed = None
+            self._evaluations = None
         self.time += dt
         self.step_index += 1
         self._run_hooks("after_step")

@@ -381,7 +381,9 @@ class MirrorGhosts(Boundary):
         st = sim.state
         gidx, src, s1, s2 = self._ghost
         n_on = gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
-        count = np.zeros(st.n, dtype=np.int64)
+        count = getattr(self, "_count", None)
+        if count is None or count.shape[0] != st.n:
+            count = self._count = np.zeros(st.n, dtype=np.int64)     # kept: no allocation a step
         gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
         if int(count.sum()) != n_on:
             return False

@@ -21,12 +21,22 @@ from sphfoam.registry import Coeffs, register
 
 
 @njit(parallel=True, cache=True, fastmath=set(FASTMATH))
-def add_correction(u, du, kind):
-    """u + du for fluid particles (walls keep their prescribed velocity)."""
-    out = np.empty_like(u)
+def add_correction(u, du, kind, out):
+    """out = u + du for fluid particles (walls keep their prescribed velocity)."""
     for a in prange(u.shape[0]):
         out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
-    return out
+
+
+def corrected_velocity(owner, sim, u, v, du, dv):
+    """(u + du, v + dv) of the fluid particles (walls: u, v) in two arrays ``owner`` keeps
+    between calls, so that no step allocates: valid until the owner's next call."""
+    buf = getattr(owner, "_advection_buffers", None)
+    if buf is None or buf[0].shape != u.shape or buf[0].dtype != u.dtype:
+        buf = (np.empty_like(u), np.empty_like(v))
+        owner._advection_buffers = buf
+    add_correction(u, du, sim.state.kind, buf[0])
+    add_correction(v, dv, sim.state.kind, buf[1])
+    return buf
 
 
 @njit(parallel=True, cache=True, fastmath=set(FASTMATH))
@@ -133,7 +143,7 @@ vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
         pipe = sim.pipeline
         du = sim.aux[pipe.aux_index("xsph_du")]
         dv = sim.aux[pipe.aux_index("xsph_dv")]
-        return add_correction(u, du, sim.state.kind), add_correction(v, dv, sim.state.kind)
+        return corrected_velocity(self, sim, u, v, du, dv)
 
 
 @register

@@ -15,6 +15,16 @@ from sphfoam.registry import Coeffs, Model, register
 _JIT = dict(cache=True, fastmath=set(FASTMATH), parallel=True)
 
 
+def step_buffers(owner, n: int, k: int) -> tuple:
+    """k float64 arrays of n that ``owner`` keeps between steps (no allocation per step); an
+    integrator's copy of the state at the start of a step, overwritten by the next."""
+    buf = getattr(owner, "_step_buffers", None)
+    if buf is None or len(buf) != k or buf[0].shape[0] != n:
+        buf = tuple(np.empty(n) for _ in range(k))
+        owner._step_buffers = buf
+    return buf
+
+
 @njit(**_JIT)
 def _monaghan_half(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt0, u0, v0):
     """T(3.91)-(3.93): r, v, rho to mid-step; v^0 is kept in ``u0, v0`` for the kick.
@@ -108,14 +118,9 @@ class Monaghan2007(Model):
 
 # --- predictor-corrector, P(37)-(38) -------------------------------------------------------
 @njit(**_JIT)
-def _pc_predict(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt):
-    """P(37): rho, v, r to t^k + dt/2 with M^k, F^k, U^k; returns the state at t^k."""
+def _pc_predict(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt, x0, y0, u0, v0, rho0):
+    """P(37): rho, v, r to t^k + dt/2 with M^k, F^k, U^k; the state at t^k into x0 ... rho0."""
     n = x.shape[0]
-    x0 = np.empty(n)
-    y0 = np.empty(n)
-    u0 = np.empty(n)
-    v0 = np.empty(n)
-    rho0 = np.empty(n)
     hdt = 0.5 * dt
     for a in prange(n):
         x0[a] = x[a]
@@ -129,7 +134,6 @@ def _pc_predict(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt):
         if kind[a] == 0:
             u[a] += hdt * ax[a]
             v[a] += hdt * ay[a]
-    return x0, y0, u0, v0, rho0
 
 
 @njit(**_JIT)
@@ -162,6 +166,8 @@ class PredictorCorrector(Model):
     name = "predictorCorrector"
     doc = "predictor-corrector (midpoint) scheme, P(37)-(38), step from P(39) / T(3.88)-(3.90)"
     force_evaluations_per_step = 2
+    #: dt comes from the step's first evaluation: the mid-step one skips sigma, T(3.89)
+    time_step_from_first_evaluation = True
 
     def step(self, sim, dt_remaining: float) -> float:
         """Advance ``sim`` by one step of at most ``dt_remaining``; return the time advanced."""
@@ -170,8 +176,9 @@ class PredictorCorrector(Model):
         sim.rates()                               # M^k, F^k
         dt = min(sim.time_step(), dt_remaining)
         pu, pv = sim.position_velocity(st.u, st.v)   # U^k
-        saved = _pc_predict(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho,
-                            st.kind, dt)
+        saved = step_buffers(self, st.n, 5)
+        _pc_predict(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho, st.kind,
+                    dt, *saved)
         sim.move_walls(sim.time + 0.5 * dt)
         sim.eos()
         sim.rates()                               # M^k+1/2, F^k+1/2
@@ -286,15 +293,10 @@ class Verlet(Model):
 
 # --- symplectic position Verlet (DualSPHysics) ---------------------------------------------
 @njit(**_JIT)
-def _symplectic_half(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt):
-    """r, rho, v to t^n + dt/2 with U^n, D^n, F^n; returns (u^n, v^n, rho^n) and the velocity
-    correction U^n - v^n (zero without XSPH)."""
+def _symplectic_half(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt, u0, v0, rho0, du0, dv0):
+    """r, rho, v to t^n + dt/2 with U^n, D^n, F^n; (u^n, v^n, rho^n) and the velocity
+    correction U^n - v^n (zero without XSPH) into u0 ... dv0."""
     n = x.shape[0]
-    u0 = np.empty(n)
-    v0 = np.empty(n)
-    rho0 = np.empty(n)
-    du0 = np.empty(n)
-    dv0 = np.empty(n)
     hdt = 0.5 * dt
     for a in prange(n):
         u0[a] = u[a]
@@ -308,7 +310,6 @@ def _symplectic_half(x, y, u, v, pu, pv, rho, ax, ay, drho, kind, dt):
         if kind[a] == 0:
             u[a] += hdt * ax[a]
             v[a] += hdt * ay[a]
-    return u0, v0, rho0, du0, dv0
 
 
 @njit(**_JIT)
@@ -357,6 +358,8 @@ class Symplectic(Model):
     doc = ("symplectic position Verlet of DualSPHysics (Leimkuhler), half step, F^n+1/2, "
            "rho^n+1 = rho^n (2 - eps)/(2 + eps)")
     force_evaluations_per_step = 2
+    #: dt comes from the step's first evaluation: the mid-step one skips sigma, T(3.89)
+    time_step_from_first_evaluation = True
 
     def step(self, sim, dt_remaining: float) -> float:
         """Advance ``sim`` by one step of at most ``dt_remaining``; return the time advanced."""
@@ -365,8 +368,9 @@ class Symplectic(Model):
         sim.rates()                               # F^n, D^n
         dt = min(sim.time_step(), dt_remaining)
         pu, pv = sim.position_velocity(st.u, st.v)
-        saved = _symplectic_half(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho,
-                                 st.kind, dt)
+        saved = step_buffers(self, st.n, 5)
+        _symplectic_half(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho,
+                         st.kind, dt, *saved)
         sim.move_walls(sim.time + 0.5 * dt)
         sim.eos()
         sim.rates()                               # F^n+1/2, D^n+1/2

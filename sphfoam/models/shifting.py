@@ -52,7 +52,7 @@ from pydantic import Field
 
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
-from sphfoam.models.corrections import add_correction, add_rate
+from sphfoam.models.corrections import add_rate, corrected_velocity
 from sphfoam.registry import Coeffs, register
 
 
@@ -330,7 +330,7 @@ else:
         pipe = sim.pipeline
         du = sim.aux[pipe.aux_index("shift_du")]
         dv = sim.aux[pipe.aux_index("shift_dv")]
-        return add_correction(u, du, sim.state.kind), add_correction(v, dv, sim.state.kind)
+        return corrected_velocity(self, sim, u, v, du, dv)
 
     # the corrections' hooks exist only where they are selected (a model the case does not
     # select costs nothing: no call per evaluation)
