@@ -128,12 +128,13 @@ CASE_DIRS = {
     "matched": HERE / "cases" / "damBreakMatched",
     # the thesis flume (Goring paddle, quartic kernel, stationary ghosts, T ch. 4)
     "flume": REPO / "tutorials" / "solitaryWave",
-    # P's wall case (finite Gaussian, XSPH, MLS every 20 steps, mirrored walls)
+    # P's wall case (finite Gaussian, XSPH, MLS every 20 steps, mirrored walls) with T's
+    # monaghan2007 (the tutorial's integrator to the eleventh session: CASE_EDITS)
     "wall": REPO / "tutorials" / "solitaryWallRunup",
     # the same with XSPH's velocity once per step (velocityCorrection evaluation oncePerStep)
     "wallOnce": REPO / "tutorials" / "solitaryWallRunup",
     # the wall case with P's own time integration, the predictor-corrector P(37)-(38), for
-    # the tutorial's monaghan2007 (two evaluations a step, no density-only pass)
+    # monaghan2007 (two evaluations a step, no density-only pass): the tutorial as it is
     "wallPC": REPO / "tutorials" / "solitaryWallRunup",
     # wallPC with XSPH's velocity once per step, from the step's first state (the issue's
     # "XSPH's velocity computed once per step where the integrator allows it")
@@ -155,7 +156,13 @@ CASE_DIRS = {
 }
 #: dictionary edits of a --case beyond the size (``clone_case`` syntax)
 CASE_EDITS = {
+    # the tutorial integrates with P's predictor-corrector since the twelfth session; "wall"
+    # and the cases derived from it keep T's monaghan2007, as every figure measured before
+    "wall": {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
+    },
     "wallOnce": {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
         "constant/sphProperties:velocityCorrection": {"type": "xsph", "epsilon": 0.5,
                                                       "evaluation": "oncePerStep"},
     },
@@ -185,6 +192,7 @@ CASE_EDITS = {
                                                     "R": 0.0, "surfaceR": 0.2},
     },
     "wallLowDiss": {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
         "constant/sphProperties:kernel": {"type": "quartic", "hdx": 1.3},
         "constant/sphProperties:velocityCorrection": {"type": "none"},
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
@@ -195,6 +203,7 @@ CASE_EDITS = {
                                             "pressure": "hydrostatic"},
     },
     "wallBare": {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
         "constant/sphProperties:velocityCorrection": {"type": "none"},
         "constant/sphProperties:densityFilter": {"type": "none"},
     },
