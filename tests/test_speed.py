@@ -353,6 +353,36 @@ def test_half_lists_give_the_same_results_with_one_and_two_threads(tutorial):
         assert np.array_equal(out[1][k], out[2][k]), k
 
 
+@pytest.mark.parametrize("nb, threads", [(1, 1), (5, 2), (10, 2), (18, 2), (9, 3), (64, 4)])
+def test_the_bands_of_a_colour_are_dealt_to_the_threads_in_turn(nb, threads):
+    """neighbours.deal_bands: each colour's order is a permutation of its bands, and the
+    contiguous share prange gives thread t (the first shares one longer where they do not
+    divide evenly) holds the colour's bands t, t + T, ...: a shallow tank's rows of water
+    go to every thread, not the bottom half to the first (twelfth session)."""
+    from sphfoam.engine.neighbours import deal_bands
+
+    n = 7
+    half = np.zeros(n + 2 * nb + 2, dtype=np.uint32)
+    half[n:n + nb + 1] = np.linspace(0, n, nb + 1).astype(np.uint32)
+    half[-1] = nb
+    deal_bands(half, n, threads)
+    order = half[n + nb + 1:n + 2 * nb + 1].astype(int)
+    start = 0
+    for colour in range(2):
+        bands = list(range(colour, nb, 2))
+        dealt = order[start:start + len(bands)]
+        start += len(bands)
+        assert sorted(dealt) == bands
+        q, r = divmod(len(bands), threads)
+        k = 0
+        for t in range(threads):
+            size = q + (t < r)
+            assert list(dealt[k:k + size]) == bands[t::threads], (colour, t)
+            k += size
+    assert half[-1] == nb and np.array_equal(half[n:n + nb + 1],
+                                             np.linspace(0, n, nb + 1).astype(np.uint32))
+
+
 # --- the prepass before the density pass -------------------------------------------------
 def test_density_pass_runs_without_a_prepass_it_does_not_read(tutorial, monkeypatch):
     """monaghan2007's density-only pass (D^1) needs the prepass only where its terms read what

@@ -20,18 +20,22 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numba
 import numpy as np
 
 import sphfoam
 from sphfoam.cachedir import cache_root
 from sphfoam.engine import terms as T
 from sphfoam.engine.fastmath import FASTMATH_SOURCE
-from sphfoam.engine.neighbours import half_lists
+from sphfoam.engine.neighbours import deal_bands, half_lists
 
-#: bands of cell rows of the half-list loops (about equal particle counts): numba's prange
-#: hands each thread an equal share of the bands of a colour, so 64 balance up to 16
-#: threads; a fixed number (not one per thread) keeps every sum's order, and so the
-#: results, the same whatever the thread count
+#: bands of cell rows of the half-list loops (about equal particle counts, but never less than
+#: a row, so a shallow tank has about as many as it has rows of water, and one band for the
+#: near-empty rows above): numba's prange hands each thread a contiguous share of a colour's
+#: bands, so they are listed dealt in turn (``deal_bands``: thread t's share holds the
+#: colour's bands t, t + T, ...), not in row order, which gave the bed's rows to one thread
+#: and the rows above the water to the other; a fixed number (not one per thread) keeps
+#: every sum's order, and so the results, the same whatever the thread count
 HALF_BANDS = 64
 
 #: the fixed scalar slots every pipeline reads from ``prm`` before the models' own
@@ -58,9 +62,11 @@ def _block(code: str, indent: int) -> str:
 #: colours (see ``rates_half``'s docstring), with a's state loaded
 _HALF_BANDS = """\
 n = x.shape[0]
+nb = int(half[half.shape[0] - 1])
 for colour in range(2):
-    for band in prange((half.shape[0] - n - colour) // 2):
-        ib = n + 2 * band + colour
+    dealt = n + nb + 1 + colour * ((nb + 1) // 2)
+    for j in prange((nb + 1 - colour) // 2):
+        ib = n + int(half[dealt + j])
         for a in range(half[ib], half[ib + 1]):
 {body}"""
 
@@ -1207,10 +1213,16 @@ class Pipeline:
         self.module.fill_neighbours(*args, start, idx)
         return start, idx
 
+    def deal_bands(self, half, threads: int):
+        """Deal the bands of ``half`` to ``threads`` threads anew (``deal_bands``)."""
+        deal_bands(half, half.shape[0] - 2 * int(half[-1]) - 2, threads)
+
     def half_lists(self, nb_start, nb_idx, cells, half=None):
         """The array ``half`` of the half-list loops ``rates_half``/``density_half``: where
-        each particle's neighbours b > a start in its list, then the first particle of each
-        cell row (see :func:`sphfoam.engine.neighbours.half_lists`); None when the selection
+        each particle's neighbours b > a start in its list, the first particle of each band
+        of cell rows (see :func:`sphfoam.engine.neighbours.half_lists`), the order the loops
+        run each colour's bands in, dealt to numba's threads now
+        (:func:`~sphfoam.engine.neighbours.deal_bands`), and the number of bands; None when the selection
         has no such loops or the list does not allow them. ``half`` is reused if it fits.
         (One array, not two: the loops then take 19 arguments, and CPython keeps freed
         tuples of up to 20 items, which the no-allocation check of tests/test_speed.py
@@ -1218,7 +1230,7 @@ class Pipeline:
         if self.rates_half is None and self.density_half is None:
             return None
         n = nb_start.shape[0] - 1
-        size = n + cells.ncy + 1
+        size = n + 2 * cells.ncy + 2
         if nb_start[-1] >= 2 ** 32:
             return None
         if half is None or half.base is None or half.base.shape[0] != size:
@@ -1226,8 +1238,13 @@ class Pipeline:
         else:
             buf = half.base
         nb = half_lists(nb_start, nb_idx, cells.cell_start, cells.ncx, cells.ncy,
-                        HALF_BANDS, buf[:n], buf[n:])
-        return buf[:n + nb + 1] if nb else None
+                        HALF_BANDS, buf[:n], buf[n:n + cells.ncy + 1])
+        if not nb:
+            return None
+        half = buf[:n + 2 * nb + 2]
+        half[-1] = nb
+        deal_bands(half, n, numba.get_num_threads())
+        return half
 
     @property
     def rates_half(self):
@@ -1392,7 +1409,8 @@ def _warm_up(module, prm):
     if hasattr(module, "step_pass"):
         module.step_pass(*args)
         funcs.append(module.step_pass)
-    half = np.array([0] * n + [0, n], dtype=np.uint32)
+    # [nb_mid | band starts | the bands' dealt order | nb]: one band of both particles
+    half = np.array([0] * n + [0, n, 0, 1], dtype=np.uint32)
     if hasattr(module, "rates_half"):
         module.rates_half(*args, half, f.copy(), f.copy(), f.copy(), f.copy())
         funcs.append(module.rates_half)

@@ -164,6 +164,26 @@ class CellList:
 
 
 @njit(cache=True)
+def deal_bands(half, n, threads):
+    """The order the half-list loops run each colour's bands in: ``half`` is [nb_mid (n) |
+    band starts (nb + 1) | the dealt order (nb) | nb]. prange hands thread t a contiguous
+    share of a colour's bands (the first shares one longer where they do not divide
+    evenly), so the order lists the colour's bands t, t + T, t + 2T, ... for t = 0 .. T-1:
+    each thread runs every T-th band of the colour, rows of water and rows above alike,
+    not the bottom or top half of the tank. The bands of a colour write disjoint particles,
+    so the order changes no sum."""
+    nb = int(half[half.shape[0] - 1])
+    k = n + nb + 1
+    t_count = max(threads, 1)
+    for colour in range(2):
+        n_colour = (nb + 1 - colour) // 2
+        for t in range(t_count):
+            for p in range(t, n_colour, t_count):
+                half[k] = 2 * p + colour
+                k += 1
+
+
+@njit(cache=True)
 def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start):
     """Split the neighbour list for the half-list loops: ``nb_mid[a]`` is where the
     neighbours b > a of particle a start in its list; the cell rows are grouped into about

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -103,6 +104,8 @@ class Simulation:
         self.half_lists = True
         #: the current list's array for the half-list loops (``Pipeline.half_lists``), or None
         self._half = None
+        #: the thread count the bands of ``_half`` are dealt to
+        self._half_threads = 0
         #: the per-particle sums of the half-list prepass (``Pipeline.prepass_half``)
         self._sums = None
         #: in a step: whether its prepass ran (``Pipeline.prepass_once``); None outside a step
@@ -227,6 +230,16 @@ class Simulation:
         self.list_built += 1
         self._half = (self.pipeline.half_lists(*self._nb, self.cells, self._half)
                       if self.half_lists else None)
+        self._half_threads = numba.get_num_threads()       # as half_lists dealt the bands
+
+    def _half_lanes(self):
+        """The half lists, their bands dealt to the threads numba runs now
+        (``neighbours.deal_bands``: dealt again when the thread count changed)."""
+        threads = numba.get_num_threads()
+        if threads != self._half_threads:
+            self.pipeline.deal_bands(self._half, threads)
+            self._half_threads = threads
+        return self._half
 
     def _grid_args(self):
         st = self.state
@@ -264,7 +277,7 @@ class Simulation:
             # (Assembly.prepass_half_terms), which read the pair cache where it stored it
             if self._sums is None or self._sums.shape[1] != self.state.n:
                 self._sums = np.empty((pipe.prepass_sums, self.state.n), dtype=self.dtype)
-            pipe.prepass_half(*args, self._half, self._sums)
+            pipe.prepass_half(*args, self._half_lanes(), self._sums)
         else:
             pipe.prepass(*args)
 
@@ -310,7 +323,7 @@ class Simulation:
             self._evaluations += 1
         out_sigma = st.sigma if sigma else st.sigma[:0]
         if self.half_lists and self._half is not None and self.pipeline.rates_half is not None:
-            self.pipeline.rates_half(*args, self._half, st.ax, st.ay, st.drho, out_sigma)
+            self.pipeline.rates_half(*args, self._half_lanes(), st.ax, st.ay, st.drho, out_sigma)
         else:
             self.pipeline.rates(*args, st.ax, st.ay, st.drho, out_sigma)
         self._run_hooks("after_rates")
@@ -321,7 +334,7 @@ class Simulation:
         self._prepass(args, "density")
         if self.half_lists and self._half is not None and \
                 self.pipeline.density_half is not None:
-            self.pipeline.density_half(*args, self._half, self.state.drho)
+            self.pipeline.density_half(*args, self._half_lanes(), self.state.drho)
         else:
             self.pipeline.density_rate(*args, self.state.drho)
         self._run_hooks("after_density_rate")
