@@ -232,7 +232,7 @@ class Simulation:
                       if self.half_lists else None)
         self._half_threads = numba.get_num_threads()       # as half_lists dealt the bands
 
-    def _half_lanes(self):
+    def _dealt_half(self):
         """The half lists, their bands dealt to the threads numba runs now
         (``neighbours.deal_bands``: dealt again when the thread count changed)."""
         threads = numba.get_num_threads()
@@ -277,7 +277,7 @@ class Simulation:
             # (Assembly.prepass_half_terms), which read the pair cache where it stored it
             if self._sums is None or self._sums.shape[1] != self.state.n:
                 self._sums = np.empty((pipe.prepass_sums, self.state.n), dtype=self.dtype)
-            pipe.prepass_half(*args, self._half_lanes(), self._sums)
+            pipe.prepass_half(*args, self._dealt_half(), self._sums)
         else:
             pipe.prepass(*args)
 
@@ -323,7 +323,7 @@ class Simulation:
             self._evaluations += 1
         out_sigma = st.sigma if sigma else st.sigma[:0]
         if self.half_lists and self._half is not None and self.pipeline.rates_half is not None:
-            self.pipeline.rates_half(*args, self._half_lanes(), st.ax, st.ay, st.drho, out_sigma)
+            self.pipeline.rates_half(*args, self._dealt_half(), st.ax, st.ay, st.drho, out_sigma)
         else:
             self.pipeline.rates(*args, st.ax, st.ay, st.drho, out_sigma)
         self._run_hooks("after_rates")
@@ -334,7 +334,7 @@ class Simulation:
         self._prepass(args, "density")
         if self.half_lists and self._half is not None and \
                 self.pipeline.density_half is not None:
-            self.pipeline.density_half(*args, self._half_lanes(), self.state.drho)
+            self.pipeline.density_half(*args, self._dealt_half(), self.state.drho)
         else:
             self.pipeline.density_rate(*args, self.state.drho)
         self._run_hooks("after_density_rate")
