@@ -13,6 +13,17 @@ PERSISTENT_F8 = ("x", "y", "u", "v", "rho", "m")
 PERSISTENT_I8 = ("kind", "id")
 #: per-step work arrays (recomputed, never written)
 SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma", "u_half", "v_half")
+
+
+def kept_arrays(owner, name: str, k: int, n: int, dtype=np.float64) -> tuple:
+    """k arrays of n ``dtype`` that ``owner`` keeps as attribute ``name`` between calls and
+    makes anew only when n or the dtype changed: a model's per-step work arrays without an
+    allocation a step. Their contents are the caller's: valid until its next call."""
+    buf = getattr(owner, name, None)
+    if buf is None or len(buf) != k or buf[0].shape[0] != n or buf[0].dtype != dtype:
+        buf = tuple(np.empty(n, dtype=dtype) for _ in range(k))
+        setattr(owner, name, buf)
+    return buf
 #: arrays held in the working precision (``sphSchemes`` ``precision``): everything but the
 #: positions, the kind/id and the extra fields, which stay double (positions as DualSPHysics
 #: keeps them: relative positions are formed in double, then rounded)

@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from sphfoam.engine.state import GHOST
+from sphfoam.engine.state import GHOST, kept_arrays
 from sphfoam.engine.terms import Term, collect
 from sphfoam.models import mirror as gh
 from sphfoam.models import walllaw as wl
@@ -381,9 +381,7 @@ class MirrorGhosts(Boundary):
         st = sim.state
         gidx, src, s1, s2 = self._ghost
         n_on = gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
-        count = getattr(self, "_count", None)
-        if count is None or count.shape[0] != st.n:
-            count = self._count = np.zeros(st.n, dtype=np.int64)     # kept: no allocation a step
+        count = kept_arrays(self, "_count", 1, st.n, np.int64)[0]    # every entry written
         gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
         if int(count.sum()) != n_on:
             return False

@@ -9,12 +9,11 @@ from __future__ import annotations
 
 from typing import Literal
 
-import numpy as np
-
 from numba import njit, prange
 from pydantic import Field
 
 from sphfoam.engine.fastmath import FASTMATH
+from sphfoam.engine.state import kept_arrays
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
@@ -30,10 +29,7 @@ def add_correction(u, du, kind, out):
 def corrected_velocity(owner, sim, u, v, du, dv):
     """(u + du, v + dv) of the fluid particles (walls: u, v) in two arrays ``owner`` keeps
     between calls, so that no step allocates: valid until the owner's next call."""
-    buf = getattr(owner, "_advection_buffers", None)
-    if buf is None or buf[0].shape != u.shape or buf[0].dtype != u.dtype:
-        buf = (np.empty_like(u), np.empty_like(v))
-        owner._advection_buffers = buf
+    buf = kept_arrays(owner, "_advection", 2, u.shape[0], u.dtype)
     add_correction(u, du, sim.state.kind, buf[0])
     add_correction(v, dv, sim.state.kind, buf[1])
     return buf

@@ -8,21 +8,12 @@ from numba import njit, prange
 from pydantic import Field
 
 from sphfoam.engine.fastmath import FASTMATH
+from sphfoam.engine.state import kept_arrays
 from sphfoam.registry import Coeffs, Model, register
 
 #: fast math without reassociation: the cached code computes what freshly compiled code does
 #: (sphfoam.engine.fastmath)
 _JIT = dict(cache=True, fastmath=set(FASTMATH), parallel=True)
-
-
-def step_buffers(owner, n: int, k: int) -> tuple:
-    """k float64 arrays of n that ``owner`` keeps between steps (no allocation per step); an
-    integrator's copy of the state at the start of a step, overwritten by the next."""
-    buf = getattr(owner, "_step_buffers", None)
-    if buf is None or len(buf) != k or buf[0].shape[0] != n:
-        buf = tuple(np.empty(n) for _ in range(k))
-        owner._step_buffers = buf
-    return buf
 
 
 @njit(**_JIT)
@@ -176,7 +167,7 @@ class PredictorCorrector(Model):
         sim.rates()                               # M^k, F^k
         dt = min(sim.time_step(), dt_remaining)
         pu, pv = sim.position_velocity(st.u, st.v)   # U^k
-        saved = step_buffers(self, st.n, 5)
+        saved = kept_arrays(self, "_saved", 5, st.n)   # the state at the step's start
         _pc_predict(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho, st.kind,
                     dt, *saved)
         sim.move_walls(sim.time + 0.5 * dt)
@@ -368,7 +359,7 @@ class Symplectic(Model):
         sim.rates()                               # F^n, D^n
         dt = min(sim.time_step(), dt_remaining)
         pu, pv = sim.position_velocity(st.u, st.v)
-        saved = step_buffers(self, st.n, 5)
+        saved = kept_arrays(self, "_saved", 5, st.n)   # the state at the step's start
         _symplectic_half(st.x, st.y, st.u, st.v, pu, pv, st.rho, st.ax, st.ay, st.drho,
                          st.kind, dt, *saved)
         sim.move_walls(sim.time + 0.5 * dt)
