@@ -9,6 +9,7 @@ studyDict;`` or that has ``variants`` or ``axes``). All problems come back in on
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,6 +29,9 @@ class CheckReport:
     studies: dict[str, object] = field(default_factory=dict)   # file name -> Study
 
 
+_STUDY_HEADER = re.compile(rb"\bobject\s+studyDict\s*;")
+
+
 def study_dicts(path: Path) -> list[Path]:
     """The study dictionaries lying in a case folder (not in system/ or constant/)."""
     out = []
@@ -44,8 +48,10 @@ def study_dicts(path: Path) -> list[Path]:
         try:
             d = foamdict.read(f)
         except (ValueError, OSError):
-            # a file that names studyDict in its header but does not parse: report it
-            if b"studyDict" in head:
+            # a file that does not parse is reported only where it says it is a study
+            # dictionary (its name, or a FoamFile header "object studyDict"): a log the
+            # user redirected into the case folder names studyDict in its text too
+            if f.name.startswith("studyDict") or _STUDY_HEADER.search(head):
                 out.append(f)
             continue
         hdr = d.get("FoamFile") if isinstance(d.get("FoamFile"), dict) else {}

@@ -95,3 +95,17 @@ def test_models_lists_families():
         assert word in res.output
     res = runner.invoke(app, ["models", "kernal"])
     assert res.exit_code == 2 and "did you mean 'kernel'?" in res.output
+
+
+def test_check_reports_a_broken_study_dictionary_but_not_a_log_naming_one(tutorial):
+    """A shell log redirected into the case (``> log1``) quotes "studyDict" but is no study
+    dictionary; a file called studyDict.* that does not parse is one, and is reported."""
+    from sphfoam.check import check_case
+
+    case = tutorial("hydrostaticTank")
+    (case / "log1").write_text("study studyDict.mine: 2 run(s)\n| run | H18 |\n")
+    check_case(case, study_runs=False)
+    (case / "studyDict.mine").write_text("variants { a { dx 0.1; }\n")
+    with pytest.raises(CaseError) as e:
+        check_case(case, study_runs=False)
+    assert "studyDict.mine" in str(e.value) and "log1" not in str(e.value)
