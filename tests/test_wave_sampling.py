@@ -480,3 +480,87 @@ def test_fraction_mode_in_the_objects(tmp_path):
     ru.start(case, ctx, "0")
     assert ru.measure(sim.state.x, sim.state.y, v) == pytest.approx(
         eta_sech2(20.0, x0), abs=0.1 * DX)
+
+
+# --- surface volume: the column's water volume (issue 13) ----------------------------------------
+def test_column_depth_is_the_columns_volume_whatever_the_heights():
+    """sum_b V_b G(x - x_b) of columns holding S(x_c) dx of water reads S to 0.01 dx (the
+    window's smoothing, 1/2 width^2 S'', is 0.001 dx here) and does not move at all when the
+    particles of each column are shuffled up and down."""
+    S = SURFACES["solitary"]
+    x, y, v = columns(S)
+    g = np.linspace(1.0, 5.0, 161)
+    depth = waves.column_depth(x, v, g, DX)
+    assert np.max(np.abs(depth - S(g))) <= 0.01 * DX
+    rng = np.random.default_rng(3)
+    shuffled = waves.column_depth(x, v, g, DX)
+    y2 = y + rng.uniform(-0.4, 0.4, y.size) * DX                    # x kept: the same columns
+    assert y2.std() > 0 and np.array_equal(shuffled, depth)
+
+
+def _reference(tmp_path, x, y, v):
+    """A case's first time directory ``0`` holding fluid particles of volume ``v``."""
+    from sphfoam.io.fields import write_state
+
+    n = len(x)
+    write_state(tmp_path / "0", {"positions": np.column_stack([x, y]),
+                                 "rho": np.full(n, 1000.0), "mass": 1000.0 * np.asarray(v),
+                                 "type": np.full(n, FLUID, dtype=np.int32)})
+
+
+def test_volume_mode_in_the_objects(tmp_path):
+    """waveGauges and crestTracker with ``surface volume``: the bed is calibrated on the case's
+    first time directory (still water), the wave read to 0.01 dx, and a surface layer whose
+    particles are disordered reads as it did; the fraction gauge moves with the disorder."""
+    case, ctx = fake_case(tmp_path)
+    _reference(tmp_path, *columns(lambda s: np.full_like(s, D), length=20.0))
+    x0 = 10.0
+    S = lambda s: D + eta_sech2(s, x0)                          # noqa: E731
+    x, y, v = columns(S, length=20.0)
+    sim = FakeSim(x, y)
+    sim.state.m[:] = sim.state.rho * v
+    gx = [0.05, 5, 9.5, 10, 12.25]
+    fo = build("type waveGauges; x (0.05 5 9.5 10 12.25); still 1; surface volume;")
+    fo.start(case, ctx, "0")
+    fo.execute(sim)
+    # the top two rows of every column squeezed down by 0.3 of their spacing: the same water
+    top = np.zeros(x.size, dtype=bool)
+    for xc in np.unique(x):
+        col = np.flatnonzero(x == xc)
+        top[col[np.argsort(y[col])[-2:]]] = True
+    sim.state.y[top] -= 0.3 * DX
+    fo.execute(sim)
+    fo.end()
+    _, _, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    assert np.isnan(data[0, 1]) and np.isnan(data[1, 1])     # within 5 width of the water's end
+    np.testing.assert_allclose(data[0, 2:], eta_sech2(gx[1:], x0), atol=0.01 * DX)
+    np.testing.assert_allclose(data[1, 2:], data[0, 2:], atol=1e-12)
+    frac = waves.fraction_surface(sim.state.x, sim.state.y, v, gx[1:],
+                                  case.models.sph["kernel"], ctx.h, DX, still=D)
+    assert np.max(np.abs(frac - eta_sech2(gx[1:], x0))) > 0.05 * DX
+    ct = build("type crestTracker; xMin 2; xMax 18; still 1; surface volume;")
+    ct.start(case, ctx, "0")
+    xc, ec = ct.measure(x, y, v)
+    assert xc == pytest.approx(x0, abs=0.1 * DX) and ec == pytest.approx(A, abs=0.01 * DX)
+    with pytest.raises(Exception, match="volume"):
+        build("type runUp; mode wall; x 20; surface volume;")
+
+
+def test_volume_mode_without_a_time_directory_calibrates_on_the_first_state(tmp_path):
+    """No time directory in the case (a state sampled directly): the first state sampled
+    gives the bed, and the surface then follows the columns' water, smoothed by the window
+    (standard deviation w = 2 dx here) by 1/2 w^2 eta'' = -w^2 A K^2 at the crest."""
+    case, ctx = fake_case(tmp_path)
+    still = columns(lambda s: np.full_like(s, D), length=20.0)
+    wave = columns(lambda s: D + eta_sech2(s, 10.0), length=20.0)
+    fo = build("type waveGauges; x (10); still 1; surface volume; volumeWidth 2;")
+    fo.start(case, ctx, "0")
+    for x, y, v in (still, wave):
+        sim = FakeSim(x, y)
+        sim.state.m[:] = sim.state.rho * v
+        fo.execute(sim)
+    fo.end()
+    _, _, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    assert data[0, 1] == pytest.approx(0.0, abs=0.01 * DX)    # the fraction gauge on a lattice
+    w = 2 * DX                                      # the window smooths by 1/2 w^2 eta''
+    assert data[1, 1] == pytest.approx(A - w**2 * A * K**2, abs=0.01 * DX)

@@ -100,6 +100,8 @@ def surface_elevation(x_particles, y_particles, gauges_x, dx, *, still: float = 
 # --- sub-particle surface: the SPH fluid fraction crosses 1/2 (issue 13) ------------------------
 #: a surface mode: ``particle`` (the thesis's highest particle, T §4.3.2) or ``fraction``
 SurfaceMode = Literal["particle", "fraction"]
+#: the gauges' modes (``waveGauges``, ``crestTracker``): those two or ``volume``
+GaugeSurfaceMode = Literal["particle", "fraction", "volume"]
 
 
 @njit(cache=True)
@@ -231,6 +233,104 @@ def _fluid_volumes(st, f):
     return st.m[f] / st.rho[f]
 
 
+# --- the column's water volume: surface volume (issue 13's "equivalent mass criterion") -------
+#: the Gaussian window of ``surface volume`` is cut at this many standard deviations (and
+#: renormalised: the weight it leaves out, erfc(5/sqrt 2) = 6e-7, would read as much of d)
+_COLUMN_CUT = 5.0
+
+
+@njit(cache=True)
+def _column_sums(xs, vs, lo, hi, gx, inv_sigma, cut):
+    out = np.zeros(gx.size)
+    norm = inv_sigma / (math.sqrt(2.0 * math.pi) * math.erf(cut / math.sqrt(2.0)))
+    for g in range(gx.size):
+        s = 0.0
+        for i in range(lo[g], hi[g]):
+            q = (gx[g] - xs[i]) * inv_sigma
+            s += vs[i] * math.exp(-0.5 * q * q)
+        out[g] = s * norm
+    return out
+
+
+def column_depth(x, vol, gauges_x, width) -> np.ndarray:
+    """Water volume per unit width in the vertical column at each x_g: sum_b V_b G(x_g - x_b)
+    over the fluid particles, G the Gaussian of standard deviation ``width`` (m) cut at 5
+    ``width`` and normalised. It does not depend on the particles' heights, so however the particles
+    of a column are arranged (a disordered surface layer included) it reads the column's
+    volume; the window smooths the surface by 1/2 width^2 eta'' (0.06 % of H at a solitary
+    wave's crest for H/d = 0.3 and width d/20)."""
+    g = np.atleast_1d(np.asarray(gauges_x, dtype=float))
+    x = np.asarray(x, dtype=float)
+    order = np.argsort(x, kind="stable")
+    xs = np.ascontiguousarray(x[order])
+    vs = np.ascontiguousarray(np.asarray(vol, dtype=float)[order])
+    cut = _COLUMN_CUT * width
+    lo = np.searchsorted(xs, g - cut, side="left")
+    hi = np.searchsorted(xs, g + cut, side="right")
+    return _column_sums(xs, vs, lo, hi, np.ascontiguousarray(g), 1.0 / width, _COLUMN_CUT)
+
+
+class ColumnSurface:
+    """``surface volume``: the free surface at x is the bed's elevation b(x) plus the column's
+    water volume per unit width (:func:`column_depth`), so the surface moves exactly as much
+    water as enters or leaves the column, whatever the arrangement of its particles. The
+    fraction gauge reads the surface of a regular lattice to a few 1e-4 dx, but on the
+    disordered surface layer of a running simulation its reading drifts (in the flume at
+    d/dx = 20 by +1.4 mm with δ+ shifting's anti-clumping term near the surface only, by
+    -4.5 mm with it everywhere, while the water's volume stays within 0.6 mm of the depth:
+    docs/low-dissipation.md).
+
+    b(x) is calibrated once, on the case's first time directory (the set-up's lattice, or
+    the settled state): b = the fraction gauge's surface there less the column's volume, on a
+    grid of dx/2 over the water there, interpolated between. A restart reads the same first
+    directory, so the readings continue; a case without one calibrates on the first state
+    sampled. Where that state had no water (a dry beach), or within the window's cut (5
+    ``width``) of where its water ended (a paddle, a far wall, a shoreline), b is not known
+    and the reading is NaN.
+    Overturning water is counted where it lies: under a plunging jet the reading is the
+    column's equivalent depth, not the top of the jet."""
+
+    def __init__(self, fo, width_dx: float):
+        self.fo = fo
+        self.width = width_dx * fo.ctx.dx
+        self.grid: np.ndarray | None = None
+        self.bed: np.ndarray | None = None
+        from sphfoam.case.times import list_times
+        from sphfoam.io.fields import has_particles, read_state
+
+        first = next((d for _, d in list_times(fo.case.path) if has_particles(d)), None)
+        if first is not None:
+            s = read_state(first)
+            f = np.asarray(s["type"]) == FLUID
+            self._calibrate(s["positions"][f, 0], s["positions"][f, 1],
+                            s["mass"][f] / s["rho"][f])
+
+    def _calibrate(self, x, y, vol) -> None:
+        dx = self.fo.ctx.dx
+        if np.size(x) == 0:
+            self.grid, self.bed = np.array([0.0]), np.array([np.nan])
+            return
+        n = int(math.ceil((float(np.max(x)) - float(np.min(x))) / (0.5 * dx))) + 1
+        self.grid = float(np.min(x)) + 0.5 * dx * np.arange(n)
+        top = fraction_surface(x, y, vol, self.grid, self.fo.case.models.sph["kernel"],
+                               self.fo.ctx.h, dx)
+        self.bed = top - column_depth(x, vol, self.grid, self.width)
+        # a window that reaches past the water's ends there (a paddle, a far wall, the
+        # shoreline) misses water the column has: no calibration within its cut of them
+        cut = _COLUMN_CUT * self.width
+        self.bed[(self.grid - cut < float(np.min(x))) | (self.grid + cut > float(np.max(x)))] \
+            = np.nan
+
+    def surface(self, x, y, vol, gauges_x, still: float = 0.0) -> np.ndarray:
+        """Free-surface elevation above ``still`` at ``gauges_x`` (the fluid particles and their
+        volumes V_b = m_b/rho_b)."""
+        if self.grid is None:
+            self._calibrate(x, y, vol)
+        g = np.atleast_1d(np.asarray(gauges_x, dtype=float))
+        b = np.interp(g, self.grid, self.bed, left=np.nan, right=np.nan)
+        return b + column_depth(x, vol, g, self.width) - still
+
+
 # --- SPH interpolation with Shepard normalisation ----------------------------------------------
 @njit(cache=True)
 def _shepard(xs, ys, vol, vals, lo, hi, xq, yq, inv_h, support, kernel_f):
@@ -308,7 +408,8 @@ class WaveGauges(FunctionObject):
     as in ``damBreakFront``) so that water at rest reads its true level, and ``still`` is
     subtracted. A gauge with fluid on one side only reads that particle; with none, NaN.
     With ``surface fraction`` the gauge is sub-particle instead: the highest y on the vertical
-    where the SPH fluid fraction sum_b V_b W(r - r_b) reaches 1/2 (``fraction_surface``).
+    where the SPH fluid fraction sum_b V_b W(r - r_b) reaches 1/2 (``fraction_surface``);
+    with ``surface volume`` it is the bed plus the column's water volume (``ColumnSurface``).
     """
 
     name = "waveGauges"
@@ -324,10 +425,14 @@ class WaveGauges(FunctionObject):
         window: float = Field(GAUGE_WINDOW, gt=0, description=(
             "half-width delta x of the search windows either side of a gauge, in dx "
             "(2.5 in T §4.3.2)"))
-        surface: SurfaceMode = Field("particle", description=(
+        surface: GaugeSurfaceMode = Field("particle", description=(
             "`particle`: the thesis's highest particle + dx/2 (T §4.3.2); `fraction`: where the "
             "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
-            "sub-particle (issue 13)"))
+            "sub-particle (issue 13); `volume`: the bed plus the column's water volume per "
+            "unit width, sum_b V_b G(x - x_b), whatever the arrangement of its particles, the "
+            "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
+        volumeWidth: float = Field(1.0, gt=0, description=(
+            "surface volume: standard deviation of the Gaussian window G, in dx"))
 
         @field_validator("x", mode="before")
         @classmethod
@@ -337,11 +442,16 @@ class WaveGauges(FunctionObject):
     def start(self, case, ctx, start_time_name):
         self.columns = ("time",) + tuple(f"eta({_label(x)})" for x in self.coeffs.x)
         super().start(case, ctx, start_time_name)
+        self.column = (ColumnSurface(self, self.coeffs.volumeWidth)
+                       if self.coeffs.surface == "volume" else None)
 
     def execute(self, sim):
         c = self.coeffs
         st, f = _fluid(sim)
-        if c.surface == "fraction":
+        if self.column is not None:
+            eta = self.column.surface(st.x[f], st.y[f], _fluid_volumes(st, f), c.x,
+                                      still=c.still)
+        elif c.surface == "fraction":
             eta = fraction_surface(st.x[f], st.y[f], _fluid_volumes(st, f), c.x,
                                    self.case.models.sph["kernel"], self.ctx.h, self.ctx.dx,
                                    still=c.still)
@@ -712,7 +822,8 @@ class CrestTracker(FunctionObject):
     the samples with ``fitFrom`` <= x_c <= ``fitTo`` and eta_c >= ``minHeight`` and written
     to ``celerity.dat`` (the thesis's average wave speed between two gauges, T Table 4.3,
     with every sample in between). ``surface fraction`` reads the gauges by the SPH fluid
-    fraction 1/2 (sub-particle) instead of the highest particle.
+    fraction 1/2 (sub-particle) instead of the highest particle, ``surface volume`` by the
+    column's water volume (``ColumnSurface``).
     """
 
     name = "crestTracker"
@@ -729,10 +840,14 @@ class CrestTracker(FunctionObject):
         still: float = Field(0.0, description="still-water level (m): eta = surface y - still")
         window: float = Field(GAUGE_WINDOW, gt=0, description=(
             "half-width of each gauge's search windows, in dx (2.5 in T §4.3.2)"))
-        surface: SurfaceMode = Field("particle", description=(
+        surface: GaugeSurfaceMode = Field("particle", description=(
             "`particle`: the thesis's highest particle + dx/2 (T §4.3.2); `fraction`: where the "
             "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
-            "sub-particle (issue 13)"))
+            "sub-particle (issue 13); `volume`: the bed plus the column's water volume per "
+            "unit width, sum_b V_b G(x - x_b), whatever the arrangement of its particles, the "
+            "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
+        volumeWidth: float = Field(1.0, gt=0, description=(
+            "surface volume: standard deviation of the Gaussian window G, in dx"))
         fitAbove: float = Field(0.5, gt=0, lt=1, description=(
             "x_c is the vertex of the parabola fitted to the readings above this fraction "
             "of the crest height"))
@@ -746,6 +861,8 @@ class CrestTracker(FunctionObject):
 
     def start(self, case, ctx, start_time_name):
         super().start(case, ctx, start_time_name)
+        self.column = (ColumnSurface(self, self.coeffs.volumeWidth)
+                       if self.coeffs.surface == "volume" else None)
         self.samples: list[tuple[float, float, float]] = []
         self._written = 0
         self.summary_file = self.folder / "celerity.dat"
@@ -759,7 +876,9 @@ class CrestTracker(FunctionObject):
         hi = c.xMax if c.xMax is not None else float(xf.max())
         step = c.spacing or dx
         gx = lo + step * np.arange(int(math.floor((hi - lo) / step + 1e-9)) + 1)
-        if c.surface == "fraction":
+        if c.surface == "volume":
+            eta = self.column.surface(xf, yf, vf, gx, still=c.still)
+        elif c.surface == "fraction":
             eta = fraction_surface(xf, yf, vf, gx, self.case.models.sph["kernel"], self.ctx.h,
                                    dx, still=c.still)
         else:
