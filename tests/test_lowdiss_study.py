@@ -40,10 +40,14 @@ def test_every_run_clones_into_a_valid_case(tmp_path, case, dict_name, first):
     assert [r.name for r in todo] == [r.name for r in s.runs]
     for run in s.runs:
         ctl = foamdict.read(Path(run.path) / "system" / "controlDict")["functions"]
-        # every gauge of these studies reads the sub-particle surface (fluid fraction 1/2)
-        # (the wall study's runUpParticle keeps the thesis's reading, for comparison)
+        # every gauge of these studies reads a sub-particle surface: the flume study's by
+        # the column's water volume, with the fluid fraction 1/2 recorded beside it, the
+        # others' by the fluid fraction (the wall study's runUpParticle keeps the thesis's
+        # reading, for comparison)
+        volume = dict_name == "studyDict.lowDissipation" and case == "solitaryWave"
         for name, fo in ctl.items():
-            want = "particle" if name == "runUpParticle" else "fraction"
+            want = ("particle" if name == "runUpParticle" else
+                    "volume" if volume and name in ("gauges", "crest") else "fraction")
             assert fo.get("surface", "particle") == want, (run.name, name)
 
 
@@ -51,6 +55,8 @@ def test_flume_study_measures_against_the_exact_wave():
     s = st.load(TUTORIALS / "solitaryWave" / "studyDict.lowDissipation")
     m = s.spec.metrics
     assert [k for k in m if k.startswith("H")] == [f"H{x}" for x in range(2, 19, 2)]
+    assert {m[f"H{x}"]["function"] for x in range(2, 19, 2)} == {"gauges"}
+    assert m["F18"]["function"] == "gaugesFraction" and m["celerity"]["function"] == "crest"
     assert all(m[f"H{x}"]["reference"] == 0.15 for x in range(2, 19, 2))
     assert m["celerity"]["theory"] == "euler"
     dx = {r.name: s.edits[r.name].get("system/particleDict:dx", 0.05) for r in s.runs}
