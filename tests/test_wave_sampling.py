@@ -564,3 +564,11 @@ def test_volume_mode_without_a_time_directory_calibrates_on_the_first_state(tmp_
     assert data[0, 1] == pytest.approx(0.0, abs=0.01 * DX)    # the fraction gauge on a lattice
     w = 2 * DX                                      # the window smooths by 1/2 w^2 eta''
     assert data[1, 1] == pytest.approx(A - w**2 * A * K**2, abs=0.01 * DX)
+
+
+def test_volume_width_belongs_to_surface_volume():
+    """``volumeWidth`` with another surface mode would be ignored: it is refused, naming it."""
+    for obj in ("waveGauges; x (1)", "crestTracker"):
+        assert build(f"type {obj}; surface volume; volumeWidth 2;").coeffs.volumeWidth == 2
+        with pytest.raises(Exception, match="volumeWidth applies to surface volume only"):
+            build(f"type {obj}; surface fraction; volumeWidth 2;")

@@ -270,6 +270,15 @@ def column_depth(x, vol, gauges_x, width) -> np.ndarray:
     return _column_sums(xs, vs, lo, hi, np.ascontiguousarray(g), 1.0 / width, _COLUMN_CUT)
 
 
+def _volume_only(coeffs):
+    """``volumeWidth`` belongs to ``surface volume``: given with another mode it would be
+    ignored, so it is refused."""
+    if "volumeWidth" in coeffs.model_fields_set and coeffs.surface != "volume":
+        raise ValueError(f"volumeWidth applies to surface volume only (surface is "
+                         f"{coeffs.surface})")
+    return coeffs
+
+
 class ColumnSurface:
     """``surface volume``: the free surface at x is the bed's elevation b(x) plus the column's
     water volume per unit width (:func:`column_depth`), so the surface moves exactly as much
@@ -277,8 +286,8 @@ class ColumnSurface:
     fraction gauge reads the surface of a regular lattice to a few 1e-4 dx, but on the
     disordered surface layer of a running simulation its reading drifts (in the flume at
     d/dx = 20 by +1.4 mm with δ+ shifting's anti-clumping term near the surface only, by
-    -4.5 mm with it everywhere, while the water's volume stays within 0.6 mm of the depth:
-    docs/low-dissipation.md).
+    -4.5 mm with it everywhere at Ma 0.03, while the water's volume stays within 0.6 mm of
+    the depth: docs/low-dissipation.md).
 
     b(x) is calibrated once, on the case's first time directory (the set-up's lattice, or
     the settled state): b = the fraction gauge's surface there less the column's volume, on a
@@ -433,6 +442,10 @@ class WaveGauges(FunctionObject):
             "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
         volumeWidth: float = Field(1.0, gt=0, description=(
             "surface volume: standard deviation of the Gaussian window G, in dx"))
+
+        @model_validator(mode="after")
+        def _width(self):
+            return _volume_only(self)
 
         @field_validator("x", mode="before")
         @classmethod
@@ -848,6 +861,10 @@ class CrestTracker(FunctionObject):
             "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
         volumeWidth: float = Field(1.0, gt=0, description=(
             "surface volume: standard deviation of the Gaussian window G, in dx"))
+
+        @model_validator(mode="after")
+        def _width(self):
+            return _volume_only(self)
         fitAbove: float = Field(0.5, gt=0, lt=1, description=(
             "x_c is the vertex of the parabola fitted to the readings above this fraction "
             "of the crest height"))
