@@ -99,3 +99,18 @@ def test_collision_study_clones_into_valid_cases(tmp_path):
     for run in s.runs[1:]:
         waves = foamdict.read(Path(run.path) / "constant" / "waveProperties")["waves"]
         assert {w["theory"] for w in waves.values()} == {"euler"}
+
+
+@pytest.mark.parametrize("case, dict_name", [
+    ("solitaryWave", "studyDict.lowDissipation"),
+    ("solitaryWave", "studyDict.lowDissipationScreen"),
+    ("solitaryWallRunup", "studyDict.lowDissipation"),
+])
+def test_the_commands_in_a_study_dictionarys_comments_name_its_runs(case, dict_name):
+    """Every ``--only NAME`` that a study dictionary's comments show names one of its runs."""
+    import re
+
+    path = TUTORIALS / case / dict_name
+    names = {r.name for r in st.load(path).runs}
+    shown = re.findall(r"--only\s+(\S+)", path.read_text())
+    assert set(shown) <= names, set(shown) - names
