@@ -270,13 +270,25 @@ def column_depth(x, vol, gauges_x, width) -> np.ndarray:
     return _column_sums(xs, vs, lo, hi, np.ascontiguousarray(g), 1.0 / width, _COLUMN_CUT)
 
 
-def _volume_only(coeffs):
-    """``volumeWidth`` belongs to ``surface volume``: given with another mode it would be
-    ignored, so it is refused."""
-    if "volumeWidth" in coeffs.model_fields_set and coeffs.surface != "volume":
-        raise ValueError(f"volumeWidth applies to surface volume only (surface is "
-                         f"{coeffs.surface})")
-    return coeffs
+class _GaugeSurfaceCoeffs(FunctionObjectCoeffs):
+    """How ``waveGauges`` and ``crestTracker`` read the surface."""
+
+    surface: GaugeSurfaceMode = Field("particle", description=(
+        "`particle`: the thesis's highest particle + dx/2 (T §4.3.2); `fraction`: where the "
+        "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
+        "sub-particle (issue 13); `volume`: the bed plus the column's water volume per "
+        "unit width, sum_b V_b G(x - x_b), whatever the arrangement of its particles, the "
+        "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
+    volumeWidth: float = Field(1.0, gt=0, description=(
+        "surface volume: standard deviation of the Gaussian window G, in dx"))
+
+    @model_validator(mode="after")
+    def _width(self):
+        """``volumeWidth`` with another mode would be ignored, so it is refused."""
+        if "volumeWidth" in self.model_fields_set and self.surface != "volume":
+            raise ValueError(f"volumeWidth applies to surface volume only (surface is "
+                             f"{self.surface})")
+        return self
 
 
 class ColumnSurface:
@@ -425,7 +437,7 @@ class WaveGauges(FunctionObject):
     doc = "free-surface elevation eta(t) at wave gauges: highest particle within 2.5 dx either " \
           "side, interpolated linearly, T §4.3.2"
 
-    class Coeffs(FunctionObjectCoeffs):
+    class Coeffs(_GaugeSurfaceCoeffs):
         x: list[float] = Field(min_length=1, description=(
             "gauge positions (m), e.g. `(1 2 4 6 8)` (T §4.3.2 used x = 1, 2 m and then every "
             "2 m up to 20 m from the paddle)"))
@@ -434,18 +446,6 @@ class WaveGauges(FunctionObject):
         window: float = Field(GAUGE_WINDOW, gt=0, description=(
             "half-width delta x of the search windows either side of a gauge, in dx "
             "(2.5 in T §4.3.2)"))
-        surface: GaugeSurfaceMode = Field("particle", description=(
-            "`particle`: the thesis's highest particle + dx/2 (T §4.3.2); `fraction`: where the "
-            "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
-            "sub-particle (issue 13); `volume`: the bed plus the column's water volume per "
-            "unit width, sum_b V_b G(x - x_b), whatever the arrangement of its particles, the "
-            "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
-        volumeWidth: float = Field(1.0, gt=0, description=(
-            "surface volume: standard deviation of the Gaussian window G, in dx"))
-
-        @model_validator(mode="after")
-        def _width(self):
-            return _volume_only(self)
 
         @field_validator("x", mode="before")
         @classmethod
@@ -844,7 +844,7 @@ class CrestTracker(FunctionObject):
           "least-squares fits), T §4.3.2"
     columns = ("time", "xCrest", "etaCrest", "c")
 
-    class Coeffs(FunctionObjectCoeffs):
+    class Coeffs(_GaugeSurfaceCoeffs):
         xMin: float | None = Field(None, description=(
             "first gauge (m); default the leftmost fluid particle"))
         xMax: float | None = Field(None, description=(
@@ -853,18 +853,6 @@ class CrestTracker(FunctionObject):
         still: float = Field(0.0, description="still-water level (m): eta = surface y - still")
         window: float = Field(GAUGE_WINDOW, gt=0, description=(
             "half-width of each gauge's search windows, in dx (2.5 in T §4.3.2)"))
-        surface: GaugeSurfaceMode = Field("particle", description=(
-            "`particle`: the thesis's highest particle + dx/2 (T §4.3.2); `fraction`: where the "
-            "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
-            "sub-particle (issue 13); `volume`: the bed plus the column's water volume per "
-            "unit width, sum_b V_b G(x - x_b), whatever the arrangement of its particles, the "
-            "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
-        volumeWidth: float = Field(1.0, gt=0, description=(
-            "surface volume: standard deviation of the Gaussian window G, in dx"))
-
-        @model_validator(mode="after")
-        def _width(self):
-            return _volume_only(self)
         fitAbove: float = Field(0.5, gt=0, lt=1, description=(
             "x_c is the vertex of the parabola fitted to the readings above this fraction "
             "of the crest height"))
