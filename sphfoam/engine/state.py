@@ -14,6 +14,11 @@ PERSISTENT_I8 = ("kind", "id")
 #: per-step work arrays (recomputed, never written)
 SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma", "u_half", "v_half")
 
+#: arrays held in the working precision (``sphSchemes`` ``precision``): everything but the
+#: positions, the kind/id and the extra fields, which stay double (positions as DualSPHysics
+#: keeps them: relative positions are formed in double, then rounded)
+WORKING = ("u", "v", "rho", "m")
+
 
 def kept_arrays(owner, name: str, k: int, n: int, dtype=np.float64) -> tuple:
     """k arrays of n ``dtype`` that ``owner`` keeps as attribute ``name`` between calls and
@@ -24,10 +29,6 @@ def kept_arrays(owner, name: str, k: int, n: int, dtype=np.float64) -> tuple:
         buf = tuple(np.empty(n, dtype=dtype) for _ in range(k))
         setattr(owner, name, buf)
     return buf
-#: arrays held in the working precision (``sphSchemes`` ``precision``): everything but the
-#: positions, the kind/id and the extra fields, which stay double (positions as DualSPHysics
-#: keeps them: relative positions are formed in double, then rounded)
-WORKING = ("u", "v", "rho", "m")
 
 
 class ParticleState:

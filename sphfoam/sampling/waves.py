@@ -461,7 +461,7 @@ class WaveGauges(FunctionObject):
     def execute(self, sim):
         c = self.coeffs
         st, f = _fluid(sim)
-        if self.column is not None:
+        if c.surface == "volume":
             eta = self.column.surface(st.x[f], st.y[f], _fluid_volumes(st, f), c.x,
                                       still=c.still)
         elif c.surface == "fraction":
