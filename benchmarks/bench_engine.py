@@ -103,7 +103,7 @@ def dam_break(total: int):
 
 def build_selection():
     from sphfoam import registry
-    from sphfoam.engine.codegen import Selection
+    from sphfoam.engine.plan import Selection
 
     return Selection(*(registry.build(f, s) for f, s in MODELS), adjust_time_step=True)
 
@@ -115,7 +115,7 @@ def make_context(dx):
 
 
 def build(dx):
-    from sphfoam.engine.codegen import build_pipeline
+    from sphfoam.engine.build import build_pipeline
 
     sel = build_selection()
     ctx = make_context(dx)
@@ -693,7 +693,7 @@ def compile_child(total):
     t0 = time.perf_counter()
     import numba  # noqa: F401
     import numpy  # noqa: F401
-    import sphfoam.engine.codegen  # noqa: F401
+    import sphfoam.engine.build  # noqa: F401
     import sphfoam.engine.simulation  # noqa: F401
     import sphfoam.models  # noqa: F401
     t1 = time.perf_counter()

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from sphfoam._version import __version__
 from sphfoam.cachedir import use_numba_cache_dir
 from sphfoam.engine.threads import prefer_omp
 
-__version__ = "0.1.0"
 
 use_numba_cache_dir()       # numba's cache per version of these sources (see sphfoam.cachedir)
 prefer_omp()                # numba's OpenMP layer first (see sphfoam.engine.threads)

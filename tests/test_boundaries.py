@@ -26,7 +26,8 @@ from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
 from sphfoam.case.schemas import ParticleDict
 from sphfoam.case.times import list_times
-from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, GHOST, WALL, ParticleState
 from sphfoam.io.fields import read_state

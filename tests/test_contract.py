@@ -14,7 +14,9 @@ import sphfoam
 from sphfoam import registry
 from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.engine import terms as T
-from sphfoam.engine.codegen import CORE_PARAMS, Assembly, Selection, generate_source
+from sphfoam.engine.emit_cpu import generate_source
+from sphfoam.engine.pipeline import CORE_PARAMS
+from sphfoam.engine.plan import Plan, Selection
 from sphfoam.engine.schedule import Schedule
 from sphfoam.models.base import CaseContext, PipelineModel
 
@@ -66,7 +68,7 @@ def test_two_models_correcting_the_gradient_are_named():
     sel = selection(kernelCorrection={"type": "csph"})
     sel.turbulence = _GradientTwin()       # a second corrector in another slot
     with pytest.raises(T.ContractError) as e:
-        Assembly(sel)
+        Plan(sel)
     msg = str(e.value)
     assert "csph" in msg and "testGradientTwin" in msg and "gradW" in msg
 
@@ -75,7 +77,7 @@ def test_a_term_reading_an_unwritten_field_is_named():
     sel = selection()
     sel.velocityCorrection = _Orphan()
     with pytest.raises(T.ContractError, match="testOrphan.*'nobody'"):
-        Assembly(sel)
+        Plan(sel)
 
 
 def test_unknown_stage_and_kind_are_refused():
@@ -88,7 +90,7 @@ def test_unknown_stage_and_kind_are_refused():
     sel = selection()
     sel.velocityCorrection = Bad()
     with pytest.raises(T.ContractError, match="testBad.*stage.*postStep.*neighbour kind"):
-        Assembly(sel)
+        Plan(sel)
 
 
 def test_components_are_expanded_through_the_contract():
@@ -337,7 +339,7 @@ def test_the_reused_neighbour_list_holds_every_pair_at_every_evaluation(tutorial
 
 def test_pairs_of_two_non_fluid_particles_are_left_out_only_where_no_term_reads_them(tutorial):
     """P's wall case (mirror ghosts, XSPH): no term keeps what a pair of two ghosts adds, so
-    the list leaves those pairs out (Assembly.fluid_pairs_only) and still holds every pair
+    the list leaves those pairs out (Plan.fluid_pairs_only) and still holds every pair
     within the support with a fluid particle; 30 steps give bitwise the state of the full
     list. The dam break's wall particles sum their continuity over wall neighbours too: its
     list keeps them."""

@@ -26,7 +26,8 @@ from sphfoam import registry
 from sphfoam.case import foamdict
 from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.case.times import list_times
-from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import read_state

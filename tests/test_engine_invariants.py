@@ -24,8 +24,11 @@ import pytest
 from scipy.spatial import cKDTree
 
 from sphfoam import registry
-from sphfoam.engine import codegen
-from sphfoam.engine.codegen import CORE_PARAMS, Selection, build_pipeline, generate_source
+from sphfoam.engine import emit_cpu
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.emit_cpu import generate_source
+from sphfoam.engine.pipeline import CORE_PARAMS
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.neighbours import CellList
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import ParticleState
@@ -586,4 +589,4 @@ def test_unselected_equation_forms_are_absent():
     b = _source(continuity={"type": "densityWeighted"}, momentum={"type": "colagrossiLandrini"})
     assert "pa_rho2" in a and "pa_rho2" not in b
     assert "rhoa * mb / rhob" in b and "rhoa * mb / rhob" not in a
-    assert codegen.generate_source is generate_source
+    assert emit_cpu.generate_source is generate_source

@@ -26,7 +26,8 @@ from pydantic import ValidationError
 from scipy.integrate import dblquad
 
 from sphfoam import registry
-from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.models import mirror as gh

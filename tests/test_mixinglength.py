@@ -18,7 +18,8 @@ from pydantic import ValidationError
 
 from sphfoam import registry
 from sphfoam.case.errors import CaseError
-from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models.mirror import line_distance, segment_array

@@ -7,7 +7,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 from sphfoam import registry
-from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import ParticleState
 from sphfoam.models.base import CaseContext

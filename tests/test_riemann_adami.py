@@ -11,7 +11,8 @@ from sphfoam import registry
 from sphfoam.case.case import Case
 from sphfoam.case.times import list_times
 from sphfoam.engine import terms as T
-from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.io.fields import read_state
@@ -350,7 +351,7 @@ class _WetMark(PipelineModel):
 
 
 def test_a_prepass_for_wet_walls_runs_where_they_are_wet_and_needs_them_defined():
-    from sphfoam.engine.codegen import generate_source
+    from sphfoam.engine.emit_cpu import generate_source
 
     def src(boundary):
         sel = Selection(*(registry.build(f, {"type": t}) for f, t in (

@@ -19,7 +19,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 from sphfoam import registry
-from sphfoam.engine.codegen import Selection, build_pipeline
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import ParticleState
 from sphfoam.models.base import CaseContext
@@ -263,7 +264,7 @@ def test_contract_extensions_step_terms_for_fluid_and_composed_advection(dplus, 
     names = ["h", "inv_h", "support2", "eta2", "gx", "gy"]
     for mdl in Selection(**models).models():
         names += list(mdl.params(CTX))
-    from sphfoam.engine.codegen import generate_source
+    from sphfoam.engine.emit_cpu import generate_source
     hyb = generate_source(Selection(**models), names)
     hstep = hyb[hyb.index("def step_pass"):].split("\ndef ")[0]
     assert "if kind[a] != FLUID:" in hstep and "kind[a] == FLUID" not in hstep

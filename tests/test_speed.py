@@ -178,7 +178,7 @@ def test_the_pair_cache_gives_the_uncached_rates_bit_for_bit(tutorial, monkeypat
     """With a prepass (XSPH) every particle walks its list before the rates: it stores the
     kernel gradient factor per listed pair and the rates and density loops read it. The
     rates, sigma and drho/dt equal those of the same selection generated without the cache."""
-    from sphfoam.engine import codegen
+    from sphfoam.engine import build, plan
     from sphfoam.engine.terms import ContractError, Term
 
     d = tutorial("damBreak", {"system/particleDict:dx": 0.02,
@@ -201,8 +201,8 @@ def test_the_pair_cache_gives_the_uncached_rates_bit_for_bit(tutorial, monkeypat
     sim.density_rate()
     cached.append(st.drho.copy())
 
-    monkeypatch.setattr(codegen.Assembly, "_pair_cache", lambda self: [])
-    plain = codegen.build_pipeline(pipe.selection, case.context, pipe.core)
+    monkeypatch.setattr(plan.Plan, "_pair_cache", lambda self: [])
+    plain = build.build_pipeline(pipe.selection, case.context, pipe.core)
     assert plain.pair_cache == () and "pc[" not in plain.source_path.read_text()
     args = sim._grid_args()[:-1]                       # without the cache
     out = [np.zeros(st.n) for _ in range(4)]
@@ -290,7 +290,7 @@ def test_half_lists_only_where_every_term_mirrors(tutorial):
     """A term without a reaction or parity (C-SPH's corrected gradient in both passes, a repulsive wall force or the switched artificial
     viscosity in the rates) or a periodic axis keeps the gather over full lists for that
     pass."""
-    from sphfoam.engine.codegen import Assembly
+    from sphfoam.engine.plan import Plan
 
     for edits, density in (({"constant/sphProperties:viscosity": {"type": "improvedArtificial"}},
                             True),
@@ -304,7 +304,7 @@ def test_half_lists_only_where_every_term_mirrors(tutorial):
         sim.step()
         assert (sim._half is not None) == density
     sel = _sim(tutorial, "poiseuille", {}).pipeline.selection
-    assert sel.periodic_x and Assembly(sel).half_terms("rates") is None
+    assert sel.periodic_x and Plan(sel).half_terms("rates") is None
 
 
 def test_reaction_and_parity_declarations_are_checked():
@@ -391,7 +391,7 @@ def test_density_pass_runs_without_a_prepass_it_does_not_read(tutorial, monkeypa
     density loop then computes the kernel instead of reading the pair cache) changes no bit:
     25 steps of the dam break with delta+ shifting and Fourtakas's delta-SPH against the same
     run with the prepass forced before every pass."""
-    from sphfoam.engine.codegen import Pipeline
+    from sphfoam.engine.pipeline import Pipeline
 
     edits = {"system/particleDict:dx": 0.03,
              "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH"},
@@ -431,7 +431,7 @@ def test_xsph_once_per_step_runs_one_prepass_a_step(tutorial, monkeypatch):
     20 mm of motion at the front), velocities within 1.5 % (rms). Outside a step a pass always
     runs its own prepass. With a shifting (every evaluation) in the same prepass the
     selection is refused, naming both."""
-    from sphfoam.engine.codegen import Pipeline
+    from sphfoam.engine.pipeline import Pipeline
     from sphfoam.engine.terms import ContractError
 
     runs = {}

@@ -26,7 +26,10 @@ from pydantic import ValidationError
 from scipy.spatial import cKDTree
 
 from sphfoam import registry
-from sphfoam.engine.codegen import CORE_PARAMS, Selection, build_pipeline, generate_source
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.emit_cpu import generate_source
+from sphfoam.engine.pipeline import CORE_PARAMS
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import ParticleState
 from sphfoam.models.base import CaseContext

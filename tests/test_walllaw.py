@@ -19,7 +19,10 @@ from pydantic import ValidationError
 from sphfoam import registry
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
-from sphfoam.engine.codegen import CORE_PARAMS, Selection, build_pipeline, generate_source
+from sphfoam.engine.build import build_pipeline
+from sphfoam.engine.emit_cpu import generate_source
+from sphfoam.engine.pipeline import CORE_PARAMS
+from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models import walllaw as wl

@@ -96,7 +96,7 @@ class Simulation:
         self.on_removal = None
         self._fld = None
         self._pc = None
-        #: (nb_start, nb_idx) of the current step (sphfoam.engine.codegen.Pipeline)
+        #: (nb_start, nb_idx) of the current step (sphfoam.engine.pipeline.Pipeline)
         self._nb = (None, None)
         #: evaluate the rates and density passes over half lists (each pair once, for both
         #: particles) where the selection and the list allow it (``Pipeline.half_lists``);
@@ -274,7 +274,7 @@ class Simulation:
                 self._prepassed = True
         if self.half_lists and self._half is not None and pipe.prepass_half is not None:
             # over half lists: then the loops after it are half-list loops too
-            # (Assembly.prepass_half_terms), which read the pair cache where it stored it
+            # (Plan.prepass_half_terms), which read the pair cache where it stored it
             if self._sums is None or self._sums.shape[1] != self.state.n:
                 self._sums = np.empty((pipe.prepass_sums, self.state.n), dtype=self.dtype)
             pipe.prepass_half(*args, self._dealt_half(), self._sums)

@@ -11,7 +11,8 @@ A model contributes :class:`Term` objects (``PipelineModel.terms``). Each term s
   (a per-particle auxiliary field, ``aux[I_<name>, i]`` in the code) or ``field.<name>`` (a
   per-particle field written by the set-up, ``fld[F_<name>, i]``).
 
-The generator (``sphfoam.engine.codegen``) assembles each stage from these declarations alone:
+The generator assembles each stage from these declarations alone (the plan,
+``sphfoam.engine.plan``; the loop bodies, ``sphfoam.engine.bodies``; a backend's emitter):
 which terms enter which loop, in which order (a term that defines or corrects a pair quantity
 comes before the terms reading it), whether the kernel value is computed (only if a term of
 that loop reads ``W``), which auxiliary fields exist. :func:`check` rejects, before anything
@@ -137,7 +138,7 @@ class Term:
     #: True when what the term sums for a non-fluid particle a is discarded (its ``final``
     #: code writes a fixed value for such a particle, e.g. XSPH's dv = 0 for walls): a pair
     #: of two non-fluid particles then adds nothing this term keeps, and the neighbour list
-    #: may leave such pairs out (``Assembly.fluid_pairs_only``)
+    #: may leave such pairs out (``Plan.fluid_pairs_only``)
     nonfluid_discarded: bool = False
     #: a pair force coefficient F_ab equal to F_ba (an expression of the pair and of
     #: a's ``init`` names): the term adds -m_b F_ab grad_a W_ab to dv_a/dt and, over half

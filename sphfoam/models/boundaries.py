@@ -49,7 +49,7 @@ class Boundary(PipelineModel):
     #: as ``fld[F_<name>, b]``
     wall_fields: tuple[str, ...] = ()
     #: whether the boundary keeps particles of mass 0 in the neighbour list (dormant mirror
-    #: ghosts); the generated maximum of T(3.89) then skips them (sphfoam.engine.codegen)
+    #: ghosts); the generated maximum of T(3.89) then skips them (sphfoam.engine.bodies)
     massless_ghosts: bool = False
 
     @property

@@ -1,0 +1,419 @@
+"""The loop bodies of a pipeline, assembled from its plan: backend-neutral code.
+
+:class:`LoopBodies` writes, from a :class:`~sphfoam.engine.plan.Plan`, the code of one
+particle ``a`` in each loop: its state loaded, the terms' ``init``, the walk over its
+neighbour list (``nb_start``/``nb_idx``) with the pair quantities and the terms dispatched by
+the neighbour's kind, and the terms' ``final``; and the pair code of the half-list loops
+(each pair a < b once, a's terms and b's reactions). The code reads arrays by index and calls
+the models' helper functions: it is the same for every backend. What a backend adds is the
+loop around it (a ``prange`` over particles or bands of cell rows on the CPU,
+:mod:`sphfoam.engine.emit_cpu`; one thread per particle on a GPU), the cell walk that builds
+the list, and how its functions are compiled.
+"""
+
+from __future__ import annotations
+
+import re
+import textwrap
+
+from sphfoam.engine import terms as T
+
+
+def _block(code: str, indent: int) -> str:
+    code = textwrap.dedent(code).strip("\n")
+    return textwrap.indent(code, " " * indent) if code else ""
+
+
+def _indent(code: str, n: int = 4) -> str:
+    code = textwrap.dedent(code).strip("\n")
+    return textwrap.indent(code, " " * n) if code else " " * n + "pass"
+
+
+#: per-neighbour loads every pair loop makes (engine quantities; see sphfoam.engine.terms)
+_NEIGHBOUR_LOAD = """\
+u_ab = ua - u[b]
+v_ab = va - v[b]
+vdotr = u_ab * dx_ab + v_ab * dy_ab
+rhob = rho[b]
+pb = p[b]
+cb = c[b]
+mb = m[b]
+kindb = kind[b]
+"""
+
+_PARTICLE_LOAD = """\
+xa = x[a]
+ya = y[a]
+ua = u[a]
+va = v[a]
+rhoa = rho[a]
+pa = p[a]
+ca = c[a]
+"""
+
+#: T(3.89) with the (0.1 h)^2 guard of Monaghan (1992) that T(3.32) uses: without it a pair
+#: closing to r -> 0 (a particle meeting its own mirror image at a wall) collapses the step
+_SIGMA = """\
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    sigma_a = max(sigma_a, s_ab)
+"""
+
+#: every pair loop: over the neighbour list of particle ``a`` (built once per step)
+_LIST = """\
+for k in range(nb_start[a], nb_start[a + 1]):
+    b = nb_idx[k]
+    dx_ab = {dx}
+    dy_ab = {dy}
+{wrap}    r2 = dx_ab * dx_ab + dy_ab * dy_ab
+    if r2 >= support2 or r2 == 0.0:   # beyond the support now, or coincident (grad W = 0)
+        continue
+    q = math.sqrt(r2) * inv_h
+{body}
+"""
+
+#: the half-list loop of particle a: its listed neighbours b > a (from ``half[a]`` on)
+_HALF = """\
+for k in range(half[a], nb_start[a + 1]):
+    b = nb_idx[k]
+    dx_ab = {dx}
+    dy_ab = {dy}
+    r2 = dx_ab * dx_ab + dy_ab * dy_ab
+    if r2 >= support2 or r2 == 0.0:   # beyond the support now, or coincident (grad W = 0)
+        continue
+    q = math.sqrt(r2) * inv_h
+{body}
+"""
+
+#: T(3.89) in the half-list loop: s_ab is the same for (a, b) and (b, a); fluid particles only
+_SIGMA_HALF = """\
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    if kinda == FLUID:
+        sigma_a = max(sigma_a, s_ab)
+    if kindb == FLUID:
+        out_sigma[b] = max(out_sigma[b], s_ab)"""
+
+#: T(3.89) where the boundary keeps massless (dormant) particles in the list
+#: (``Boundary.massless_ghosts``): a neighbour of mass 0 is no neighbour, in this maximum as
+#: in every mass-weighted sum
+_SIGMA_MASSIVE = """\
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2)) if mb > 0.0 else 0.0
+    sigma_a = max(sigma_a, s_ab)
+"""
+
+_SIGMA_HALF_MASSIVE = """\
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    if kinda == FLUID and mb > 0.0:
+        sigma_a = max(sigma_a, s_ab)
+    if kindb == FLUID and ma > 0.0:
+        out_sigma[b] = max(out_sigma[b], s_ab)"""
+
+#: the same for a fluid pair
+_SIGMA_FF = """\
+if want_sigma:
+    s_ab = abs(h * vdotr / (r2 + eta2))
+    sigma_a = max(sigma_a, s_ab)
+    out_sigma[b] = max(out_sigma[b], s_ab)"""
+
+
+class LoopBodies:
+    """The code of each loop's body for one particle ``a``, from ``plan``."""
+
+    def __init__(self, plan, precision: str = "double"):
+        if precision not in ("double", "single"):
+            raise ValueError(f"precision {precision!r}: valid are double, single")
+        self.plan = plan
+        #: "single": the pairs' relative positions, formed from double positions, are
+        #: rounded to float32 (``F4``) where the loops form them
+        self.precision = precision
+
+    def relative(self, axis: str) -> str:
+        """The relative position of the pair along ``axis`` (x[a] - x[b]), in the working
+        precision."""
+        d = f"{axis}a - {axis}[b]"
+        return f"F4({d})" if self.precision == "single" else d
+
+    def _cond(self, k: str, i: str) -> str:
+        kind = "kindb" if i == "b" else f"kind[{i}]"
+        c = self.plan.kinds[k]
+        if c == "else":
+            others = [self._cond(j, i) for j in self.plan.kinds if j != k]
+            c = "not (" + " or ".join(others) + ")" if others else "True"
+            return c
+        return c.format(i=i, kind=kind)
+
+    # --- code ------------------------------------------------------------------------------
+    def neighbour_body(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
+        """Pair code of ``terms`` for one neighbour b: the definers and correctors of pair
+        quantities first, for every neighbour, then the others by neighbour kind.
+        ``cache`` "store" (in the prepass) also defines the cached pair scalars and stores
+        them in ``pc[J_<name>, k]``; "read" (in the loops after it) reads them from there."""
+        terms = self.plan.needed(terms)
+        if cache == "store":
+            extra = [t for t in self.plan.terms if t.on_demand and set(t.cache) & set(self.plan.cache)
+                     and t not in terms]
+            terms = extra + terms
+        pre = [t for t in terms if t.on_demand or set(t.corrects) & T.PAIR_QUANTITIES]
+        rest = [t for t in terms if t not in pre]
+        pre_code = []
+        for t in pre:
+            code = t.pair
+            if cache == "read" and code:
+                for n in t.cache:
+                    if n in self.plan.cache:
+                        code = re.sub(rf"(?m)^{re.escape(n)} = .*$", f"{n} = pc[J_{n}, k]",
+                                      code)
+            pre_code.append(expand_components(code) if code else "")
+        if cache == "store":
+            pre_code += [f"pc[J_{n}, k] = {n}" for n in self.plan.cache]
+        code = _NEIGHBOUR_LOAD + "\n".join(x for x in pre_code if x)
+        disp = self._dispatch(rest)
+        if disp:
+            code += "\n" + disp
+        if sigma:
+            code += "\n" + (_SIGMA_MASSIVE if self.plan.massless_ghosts else _SIGMA)
+        return code
+
+    def _dispatch(self, rest: list, i: str = "b", part: str = "pair") -> str:
+        """The ``part`` code of ``rest`` by the kind of neighbour ``i`` ("b"; "a" for the
+        reactions of the half-list loops, where a is b's neighbour)."""
+        if not rest:
+            return ""
+        self.plan.check_dispatch(rest)      # (the plan checked every loop's terms)
+        sees = {id(t): self.plan.sees(t) for t in rest}
+        alls = [t for t in rest if "all" in sees[id(t)]]
+        if alls:
+            return "\n".join(expand_components(getattr(t, part)) for t in rest
+                             if getattr(t, part))
+        per_kind = {k: [t for t in rest if k in sees[id(t)] and getattr(t, part)]
+                    for k in self.plan.kinds}
+        groups: list[tuple[list[str], list]] = []
+        for k, ts in per_kind.items():
+            for g in groups:
+                if [id(t) for t in g[1]] == [id(t) for t in ts]:
+                    g[0].append(k)
+                    break
+            else:
+                groups.append(([k], ts))
+        groups = [g for g in groups if g[1]]
+        if not groups:
+            return ""
+        if len(groups) == 1 and set(groups[0][0]) == set(self.plan.kinds) and self.plan.complete:
+            return "\n".join(expand_components(getattr(t, part)) for t in groups[0][1])
+        order = list(self.plan.kinds)
+        out = []
+        for gi, (ks, ts) in enumerate(groups):
+            later = [j for g in groups[gi + 1:] for j in g[0]]
+            conds = []
+            for k in ks:
+                c = self._cond(k, i)
+                excl = [self._cond(j, i) for j in later if order.index(j) < order.index(k)]
+                if excl:
+                    c = f"({c}) and not ({' or '.join(excl)})"
+                conds.append(c)
+            body = "\n".join(expand_components(getattr(t, part)) for t in ts)
+            kw = "if" if gi == 0 else "elif"
+            covered = {j for g in groups for j in g[0]} == set(self.plan.kinds)
+            if gi == len(groups) - 1 and gi > 0 and covered and self.plan.complete:
+                out.append("else:\n" + _indent(body))
+            else:
+                out.append(f"{kw} {' or '.join(conds)}:\n" + _indent(body))
+        return "\n".join(out)
+
+    def _wrap(self) -> str:
+        sel = self.plan.sel
+        wrap = ""
+        if sel.periodic_x:
+            wrap += ("if dx_ab > half_lx:\n    dx_ab -= lx\nelif dx_ab < -half_lx:\n"
+                     "    dx_ab += lx\n")
+        if sel.periodic_y:
+            wrap += ("if dy_ab > half_ly:\n    dy_ab -= ly\nelif dy_ab < -half_ly:\n"
+                     "    dy_ab += ly\n")
+        return wrap
+
+    def pair_loop(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
+        """The loop over the neighbour list of particle ``a`` with ``terms`` for each b."""
+        wrap = self._wrap()
+        cache = cache if self.plan.cache else None
+        return _LIST.format(dx=self.relative("x"), dy=self.relative("y"),
+                            wrap=_block(wrap, 4) + ("\n" if wrap else ""),
+                            body=_block(self.neighbour_body(terms, sigma, cache), 4))
+
+    def particle_code(self, terms: list, part: str) -> str:
+        return "\n".join(expand_components(getattr(t, part)) for t in terms
+                         if getattr(t, part))
+
+    def gather(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
+        """init, the neighbour loop and final of ``terms`` for one particle a."""
+        return "\n".join(x for x in (self.particle_code(terms, "init"),
+                                     self.pair_loop(terms, sigma, cache),
+                                     self.particle_code(terms, "final")) if x)
+
+    def prepass_loops(self) -> list[str]:
+        """The body of each prange loop of the prepass, in order: first the terms that set
+        a particle's state in place (``p``, ``c``, ``rho``, ``u``), so every other term
+        reads the value they set and none reads it while it is written; then the others.
+        Terms that apply to every particle run unbranched; otherwise fluid and wall
+        particles each run the terms that apply to them."""
+        store = self.plan._unbranched_prepass() if self.plan.cache else None
+        return [self._prepass_body(ts, "store" if i == store else None)
+                for i, ts in enumerate(self.plan._prepass_groups())]
+
+    def prepass_half_loop(self) -> str:
+        """Body of the half-list prepass loop of particle a: for each listed b > a the kernel
+        (stored in the pair cache at a's entry), a's sums and b's (the reactions), added to
+        b's in ``hs``; then a's sums added to its own."""
+        ts = self.plan.prepass_half_terms()
+        sums = self.plan.prepass_half_sums()
+        body = [self.neighbour_body(ts, cache="store" if self.plan.cache else None),
+                "\n".join(f"{n}_b = 0.0" for n in sums),
+                "\n".join(expand_components(t.reaction) for t in ts if t.reaction),
+                "\n".join(f"hs[S_{n}, b] += {n}_b" for n in sums)]
+        loop = _HALF.format(dx=self.relative("x"), dy=self.relative("y"),
+                            body=_block("\n".join(body), 4))
+        return "\n".join((self.particle_code(ts, "init"), loop,
+                          "\n".join(f"hs[S_{n}, a] += {n}" for n in sums)))
+
+    def prepass_half_final(self) -> str:
+        """The prepass's ``final`` code of particle a, its sums read back from ``hs``."""
+        ts = self.plan.prepass_half_terms()
+        return "\n".join(["\n".join(f"{n} = hs[S_{n}, a]" for n in self.plan.prepass_half_sums()),
+                          self.particle_code(ts, "final")])
+
+    def _prepass_body(self, ts: list, cache: str | None = None) -> str:
+        if all("all" in t.applies for t in ts):
+            return self.gather(ts, cache=cache)
+        fluid = [t for t in ts if {"all", "fluid"} & set(t.applies)]
+        wall = [t for t in ts if {"all", "wall"} & set(t.applies)]
+        wet = [t for t in ts if "wetWall" in t.applies and not {"all", "wall"} & set(t.applies)]
+        out = "if kind[a] == FLUID:\n" + _indent(self._gather_or_pass(fluid))
+        wall_code = self._gather_or_pass(wall)
+        if [t for t in wet if not t.on_demand]:
+            # (the plan refused wet-wall terms where the boundary defines no wet walls)
+            wet_code = self.gather([t for t in ts if t.on_demand] + wet)
+            if self.plan.kinds["wetWall"] != "else":
+                wet_code = f"if {self._cond('wetWall', 'a')}:\n" + _indent(wet_code)
+            wall_code = wet_code if wall_code == "pass" else wall_code + "\n" + wet_code
+        return out + "\nelse:\n" + _indent(wall_code)
+
+    def _gather_or_pass(self, ts: list) -> str:
+        return self.gather(ts) if [t for t in ts if not t.on_demand] else "pass"
+
+    def wall_gather(self, stage: str) -> str:
+        """The code of ``stage`` for a wall particle a: terms applying to wet walls, when a
+        is wet ("pass" where no model defines wet walls)."""
+        if "wetWall" not in self.plan.kinds:
+            return "pass"
+        ts = [t for t in self.plan.stage(stage, "wetWall") if t.pair or t.init or t.final]
+        if not [t for t in ts if not t.on_demand]:
+            return "pass"
+        body = self.gather(ts, cache=None if stage == "step" else self.plan.cache_mode(stage))
+        cond = self._cond("wetWall", "a")
+        if self.plan.kinds["wetWall"] == "else":
+            return body
+        return f"if {cond}:\n" + _indent(body)
+
+    def half_loop(self, stage: str, sigma: bool = False) -> str | None:
+        """Body of the half-list loop of particle a (see ``rates_half``): for each listed
+        b > a the pair quantities once, a's terms (by the kind of b) into a's sums, b's
+        reactions (by the kind of a) into ``acc_b_@``/``drho_b``, added to b's outputs."""
+        sel = self.plan.half_terms(stage)
+        if sel is None:
+            return None
+        fluid, wet = sel
+        ids = {id(t) for t in fluid + wet}
+        terms = [t for t in self.plan.terms if id(t) in ids]          # the global order
+        pre = [t for t in terms if t.on_demand or t.corrects]    # (correctors: with parity)
+        cache = self.plan.cache_mode(stage)
+        pre_code = []
+        for t in pre:
+            code = t.pair
+            if cache and code:
+                for n in t.cache:
+                    if n in self.plan.cache:
+                        code = re.sub(rf"(?m)^{re.escape(n)} = .*$", f"{n} = pc[J_{n}, k]",
+                                      code)
+            if code:
+                pre_code.append(expand_components(code))
+        own = [t for t in fluid if not t.on_demand and not t.corrects]
+        own_wet = [t for t in wet if not t.on_demand and not t.corrects]
+        common = []
+        if wet and self.plan.kinds["wetWall"] == "else":
+            # every particle that is not fluid is a wet wall: the terms of both run for
+            # every particle, outside the branch on its kind
+            wet_ids = {id(t) for t in own_wet}
+            common = [t for t in own if id(t) in wet_ids]
+            own = [t for t in own if id(t) not in wet_ids]
+            own_wet = [t for t in own_wet if id(t) not in {id(c) for c in common}]
+        side_a, side_b = [], []
+        if common:
+            side_a.append(self._dispatch(common))
+            side_b.append(self._dispatch(common, "a", "reaction"))
+        if own or own_wet:
+            for side, i, part in ((side_a, "b", "pair"), (side_b, "a", "reaction")):
+                kind = "kinda" if i == "b" else "kindb"
+                code = f"if {kind} == FLUID:\n" + _indent(self._dispatch(own, i, part)
+                                                          or "pass")
+                if own_wet:
+                    wet_code = self._dispatch(own_wet, i, part) or "pass"
+                    if self.plan.kinds["wetWall"] != "else":
+                        wet_code = (f"if {self._cond('wetWall', 'a' if i == 'b' else 'b')}:\n"
+                                    + _indent(wet_code))
+                    code += "\nelse:\n" + _indent(wet_code)
+                side.append(code)
+        side_a, side_b = "\n".join(x for x in side_a if x), "\n".join(x for x in side_b if x)
+        pair_code = (side_a or "pass") + "\n" + (side_b or "pass")
+        if sigma:
+            pair_code += "\n" + (_SIGMA_HALF_MASSIVE if self.plan.massless_ghosts else _SIGMA_HALF)
+        ff = self._fluid_fluid(common, own, sigma)
+        if ff is not None:
+            # the common case, a fluid pair, in straight-line code of its own: the same terms
+            # in the same order (the same sums), with no branch on the kinds between a's
+            # terms and b's reactions, so the compiler shares what they have in common
+            # (rho_a rho_b, Pi_ab, the reciprocals)
+            pair_code = ("if kinda == FLUID and kindb == FLUID:\n" + _indent(ff)
+                         + "\nelse:\n" + _indent(pair_code))
+        body = [_NEIGHBOUR_LOAD + "\n".join(pre_code),
+                "acc_b_x = 0.0\nacc_b_y = 0.0\ndrho_b = 0.0", pair_code]
+        if stage == "rates":
+            body.append("out_ax[b] += acc_b_x\nout_ay[b] += acc_b_y")
+        body.append("out_drho[b] += drho_b")
+        loop = _HALF.format(dx=self.relative("x"), dy=self.relative("y"),
+                            body=_block("\n".join(body), 4))
+        init = self.particle_code(terms, "init")
+        return "\n".join(x for x in (init, loop) if x)
+
+    def _fluid_fluid(self, common: list, own: list, sigma: bool) -> str | None:
+        """The half-list pair code of a fluid particle a and a fluid neighbour b: a's terms
+        that see fluid, then b's reactions, in the order of the general branches."""
+        ts = [t for t in common + own if {"fluid", "all"} & self.plan.sees(t)]
+        if not ts:
+            return None
+        # the force coefficients (Term.force, F_ab = F_ba) summed into one, applied once per
+        # side, where the first of them stood
+        forces = [t for t in ts if t.force]
+        fold_a = expand_components("f_ab = " + " + ".join(f"({t.force})" for t in forces)
+                                   + "\nacc_@ -= mb * f_ab * gW@") if len(forces) > 1 else ""
+        fold_b = expand_components("acc_b_@ += ma * f_ab * gW@") if fold_a else ""
+        code, code_b = [], []
+        for t in ts:
+            folded = fold_a and t.force
+            if t.pair and not folded:
+                code.append(expand_components(t.pair))
+            elif folded and t is forces[0]:
+                code.append(fold_a)
+            if t.reaction and not folded:
+                code_b.append(expand_components(t.reaction))
+            elif folded and t is forces[0]:
+                code_b.append(fold_b)
+        code += code_b
+        if sigma:
+            code.append(_SIGMA_FF)
+        return "\n".join(code)
+
+
+def expand_components(code: str) -> str:
+    return T.expand_components(code) if code else ""

@@ -1,0 +1,156 @@
+"""Build a pipeline: generate its module, cache it on disk, import and compile it.
+
+The module for a selection (:func:`sphfoam.engine.emit_cpu.generate_source`) is written to
+``<cache>/pipelines/<key>/``, where ``key`` hashes the generated source together with the
+source of sphfoam's models and engine, then imported; its functions are compiled by numba
+with ``cache=True``, so a second run of the same selection loads machine code from disk.
+(Closures over jitted functions never reach numba's disk cache; generated modules do.)
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from sphfoam._version import __version__
+from sphfoam.cachedir import cache_root
+from sphfoam.engine.emit_cpu import generate_source
+from sphfoam.engine.pipeline import CORE_PARAMS, Pipeline
+from sphfoam.engine.plan import Selection
+
+
+def _package_fingerprint() -> str:
+    """Hash of the sources the generated module imports from (models, engine)."""
+    root = Path(__file__).resolve().parent.parent
+    hsh = hashlib.sha256(__version__.encode())
+    for sub in ("models", "engine"):
+        for f in sorted((root / sub).glob("*.py")):
+            hsh.update(f.name.encode())
+            hsh.update(f.read_bytes())
+    return hsh.hexdigest()
+
+
+def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> dict:
+    """h, 1/h, the squared support radius, the eta^2 guard of T(3.32), gravity and, for periodic
+    axes, the periods: the single source of these for the pipeline, set-up, sampling and
+    benchmarks (all from the selected kernel and the case context)."""
+    h = ctx.h
+    support = ctx.support or sel.kernel.support_radius(h)   # the case context's, if set
+    core = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=ctx.eta2,
+                gx=ctx.g[0], gy=ctx.g[1])
+    if sel.periodic_x:
+        core["lx"] = float(domain_hi[0] - domain_lo[0])
+    if sel.periodic_y:
+        core["ly"] = float(domain_hi[1] - domain_lo[1])
+    return core
+
+
+def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
+                   domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> Pipeline:
+    """Generate (or reuse) the module for ``sel``, import it and compile it.
+
+    ``core`` (h, inv_h, support2, eta2, gx, gy and, for periodic axes, lx and ly) defaults to
+    :func:`core_parameters` of ``sel`` and ``ctx``; given, it must agree with them.
+    """
+    derived = core_parameters(sel, ctx, domain_lo, domain_hi)
+    if core is None:
+        core = derived
+    else:
+        for k in CORE_PARAMS:
+            if not np.isclose(float(core[k]), derived[k], rtol=1e-12, atol=0.0):
+                raise ValueError(f"core parameter {k} = {core[k]!r} differs from the one the "
+                                 f"selection and case context give ({derived[k]!r})")
+    params: dict[str, float] = {k: float(core[k]) for k in CORE_PARAMS}
+    for axis, on in (("x", sel.periodic_x), ("y", sel.periodic_y)):
+        if on:
+            params[f"l{axis}"] = float(core[f"l{axis}"])
+            params[f"half_l{axis}"] = 0.5 * float(core[f"l{axis}"])
+    for mdl in sel.models():
+        for k, val in mdl.params(ctx).items():
+            if not k.startswith(mdl.prefix):
+                raise ValueError(f"{mdl!r}: parameter {k!r} must start with {mdl.prefix!r}")
+            params[k] = float(val)
+    names = list(params)
+    src = generate_source(sel, names)
+    key = hashlib.sha256((src + _package_fingerprint()).encode()).hexdigest()[:20]
+    folder = cache_root() / "pipelines" / key
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"sphfoam_pipeline_{key}.py"
+    if not path.exists() or path.read_text() != src:
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(src)
+        os.replace(tmp, path)
+    modname = f"sphfoam_pipeline_{key}"
+    if modname in sys.modules:
+        module = sys.modules[modname]
+    else:
+        spec = importlib.util.spec_from_file_location(modname, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[modname] = module
+        spec.loader.exec_module(module)
+    prm = np.array([params[k] for k in names], dtype=sel.dtype)
+    t0 = time.perf_counter()
+    funcs = _warm_up(module, prm)
+    seconds = time.perf_counter() - t0
+    hits = sum(len(f.stats.cache_hits) for f in funcs)
+    return Pipeline(module, prm, path, seconds, hits > 0, sel, dict(core),
+                    fluid_pairs_only=bool(getattr(module, "FLUID_PAIRS_ONLY", False)))
+
+
+def _warm_up(module, prm):
+    """Compile (or load from numba's cache) every function with the real argument types."""
+    n = 2
+    dt = prm.dtype               # the working precision (positions and fields: double)
+    f = np.zeros(n, dtype=dt)
+    x = np.array([0.0, 0.5 * float(prm[0])])
+    y = np.zeros(n)
+    kind = np.zeros(n, dtype=np.int64)
+    m = np.ones(n, dtype=dt)
+    rho = np.full(n, 1000.0, dtype=dt)
+    cell_start = np.array([0, 2], dtype=np.int64)
+    aux = np.zeros((len(module.AUX), n), dtype=dt)
+    fld = np.zeros((len(module.FIELDS), n))
+    module.equation_of_state(rho, f.copy(), f.copy(), prm)
+    count = np.zeros(n, dtype=np.int64)
+    grid = (x, y, kind, False, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm,
+            float(prm[0]) ** 2 * 16.0)
+    module.count_neighbours(*grid, count)
+    # sized from the count: with periodic axes the single cell is walked 3 x 3 times, so
+    # each particle finds its neighbour up to nine times (a fixed list of two overflowed)
+    nb_start = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    nb_idx = np.zeros(int(nb_start[-1]), dtype=np.uint32)
+    module.fill_neighbours(*grid, nb_start, nb_idx)
+    args = (x, y, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
+    if getattr(module, "PAIR_CACHE", ()):
+        args += (np.zeros((len(module.PAIR_CACHE), nb_idx.shape[0]), dtype=dt),)
+    funcs = [module.equation_of_state, module.count_neighbours, module.fill_neighbours,
+             module.rates, module.density_rate]
+    module.rates(*args, f.copy(), f.copy(), f.copy(), f.copy())
+    module.density_rate(*args, f.copy())
+    if hasattr(module, "prepass"):
+        module.prepass(*args)
+        funcs.append(module.prepass)
+    if hasattr(module, "density_filter"):
+        module.density_filter(*args, f.copy())
+        funcs.append(module.density_filter)
+    if hasattr(module, "step_pass"):
+        module.step_pass(*args)
+        funcs.append(module.step_pass)
+    # [nb_mid | band starts | the bands' dealt order | nb]: one band of both particles
+    half = np.array([0] * n + [0, n, 0, 1], dtype=np.uint32)
+    if hasattr(module, "rates_half"):
+        module.rates_half(*args, half, f.copy(), f.copy(), f.copy(), f.copy())
+        funcs.append(module.rates_half)
+    if hasattr(module, "density_half"):
+        module.density_half(*args, half, f.copy())
+        funcs.append(module.density_half)
+    if hasattr(module, "prepass_half"):
+        module.prepass_half(*args, half, np.zeros((len(module.PREPASS_SUMS), n), dtype=dt))
+        funcs.append(module.prepass_half)
+    return funcs
