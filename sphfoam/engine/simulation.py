@@ -12,6 +12,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from sphfoam.engine.context import RunContext
 from sphfoam.engine.neighbours import REDUCTION_CHUNKS, CellList, displacement_check, permute
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.timestep import stable_time_step_into
@@ -137,8 +138,10 @@ class Simulation:
         changers = [m for m in sel.models() if m.implements("add_particles") or
                     m.implements("before_neighbours")]
         self.reuse_neighbours = all(m.implements("keeps_neighbours") for m in changers)
+        #: what the models' hooks see of this simulation (never the simulation itself)
+        self.context = RunContext(self)
         for attach in sel.hooks("attach"):
-            attach(self)
+            attach(self.context)
 
     @property
     def filter_every(self) -> int:
@@ -147,7 +150,7 @@ class Simulation:
 
     def _run_hooks(self, name, *args):
         for hook in self._hooks[name]:
-            hook(self, *args)
+            hook(self.context, *args)
 
     def summary(self) -> str:
         """What the selected models report at the end of a run ("" for nothing)."""
@@ -195,7 +198,7 @@ class Simulation:
         reach = math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt
         if not reach < 0.5 * self.skin:
             return False
-        return all(keeps(self) for keeps in self._hooks["keeps_neighbours"])
+        return all(keeps(self.context) for keeps in self._hooks["keeps_neighbours"])
 
     def neighbour_update(self):
         """The neighbour list of this step: the previous one while it is valid; otherwise bin
@@ -218,7 +221,7 @@ class Simulation:
             st.keep(~gone)
             cell = cell[~gone]
         for add in self._hooks["add_particles"]:
-            cell = np.concatenate([cell, add(self, cell)])
+            cell = np.concatenate([cell, add(self.context, cell)])
         order = self.cells.sort(cell)
         st.apply(order, permute)
         self._run_hooks("after_sort", order)
@@ -285,7 +288,7 @@ class Simulation:
         """The velocity positions are advanced with: (u, v) itself, or what the selected
         model that sets the advection velocity makes of it (e.g. XSPH, T(3.62))."""
         for advection in self._advection:
-            u, v = advection(self, u, v)
+            u, v = advection(self.context, u, v)
         return u, v
 
     def filter_density(self):

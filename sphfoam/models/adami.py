@@ -112,10 +112,10 @@ class Adami(Boundary):
                      writes=("rho", "u"), corrects=("p",), weighted=False)]
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
-    def attach(self, sim):
+    def attach(self, run):
         """Record each wall particle's velocity as set up (zero, or a wall entry's constant
         ``velocity``), by particle id: the prescribed velocity of walls without a motion."""
-        st = sim.state
+        st = run.state
         wall = st.kind == WALL
         n_id = int(st.id[wall].max()) + 1 if wall.any() else 0
         self._u0 = np.zeros(n_id)
@@ -124,13 +124,13 @@ class Adami(Boundary):
         self._v0[st.id[wall]] = st.v[wall]
         self._velocities = {}
 
-    def walls_moved(self, sim, offsets, velocities):
+    def walls_moved(self, run, offsets, velocities):
         self._velocities = dict(velocities)
 
-    def _prescribed_velocity(self, sim):
+    def _prescribed_velocity(self, run):
         """Put the prescribed velocity back on every wall particle (as set up, or its wall
         entry's motion): the prepass overwrote it with the extrapolated one."""
-        st = sim.state
+        st = run.state
         wall = st.kind == WALL
         ids = st.id[wall]
         st.u[wall] = self._u0[ids]
@@ -142,8 +142,8 @@ class Adami(Boundary):
                 st.u[on] = uu
                 st.v[on] = vv
 
-    def before_evaluation(self, sim):
-        self._prescribed_velocity(sim)
+    def before_evaluation(self, run):
+        self._prescribed_velocity(run)
 
-    def after_step(self, sim):
-        self._prescribed_velocity(sim)
+    def after_step(self, run):
+        self._prescribed_velocity(run)

@@ -28,25 +28,28 @@ and, declared in ``reads``: ``Wab`` (``W``), ``gWx, gWy`` (``gradW``), ``uc_ab, 
 Rates terms accumulate into ``acc_x, acc_y`` (``acc``) and ``drho_a`` (``drho``).
 
 Run-time hooks (Python, called by :class:`sphfoam.engine.simulation.Simulation` for every
-selected model that implements them; the engine names no model):
+selected model that implements them; the engine names no model). ``run`` is a
+:class:`sphfoam.engine.context.RunContext`: the particles' named arrays, the auxiliary
+fields by name, the neighbour list, the time, the coefficients by name, the cell grid and
+the walls; never the simulation itself:
 
-``attach(sim)``                    once, when the simulation is built
-``before_neighbours(sim)``         at the start of each neighbour update (before binning)
-``add_particles(sim, cell)``       after binning; may append particles (e.g. mirror ghosts)
+``attach(run)``                    once, when the simulation is built
+``before_neighbours(run)``         at the start of each neighbour update (before binning)
+``add_particles(run, cell)``       after binning; may append particles (e.g. mirror ghosts)
                                    and returns the cell index of the appended ones
-``keeps_neighbours(sim)``          at the start of a step whose neighbour list could be reused
+``keeps_neighbours(run)``          at the start of a step whose neighbour list could be reused
                                    (no particle moved too far since it was built): whether the
                                    particles this model added at the build still serve (True:
                                    reuse). A model with ``add_particles`` or ``before_neighbours``
                                    and without this hook gets a new list every step
-``after_sort(sim, order)``         after the particles were re-sorted by ``order``
-``before_evaluation(sim)``         before every evaluation of the pipeline (e.g. refresh ghosts)
-``after_rates(sim)``               after every evaluation of the rates: may add a force to
-                                   ``sim.state.ax, ay`` (e.g. a wall shear stress)
-``after_density_rate(sim)``        after every density-only pass: may add to ``sim.state.drho``
-``walls_moved(sim, offsets, velocities)``  prescribed wall motion at a stage time
-``after_step(sim)``                at the end of each step, before anything sees the state
-``advection_velocity(sim, u, v)``  the velocity positions move with (e.g. XSPH); several are
+``after_sort(run, order)``         after the particles were re-sorted by ``order``
+``before_evaluation(run)``         before every evaluation of the pipeline (e.g. refresh ghosts)
+``after_rates(run)``               after every evaluation of the rates: may add a force to
+                                   ``run.state.ax, ay`` (e.g. a wall shear stress)
+``after_density_rate(run)``        after every density-only pass: may add to ``run.state.drho``
+``walls_moved(run, offsets, velocities)``  prescribed wall motion at a stage time
+``after_step(run)``                at the end of each step, before anything sees the state
+``advection_velocity(run, u, v)``  the velocity positions move with (e.g. XSPH); several are
                                    applied in selection order, each to the previous one's
                                    result (XSPH's v + dv, then a shifting's + delta_u)
 ``summary()``                      a line for the end of the run's log ("" for none)

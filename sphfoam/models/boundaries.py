@@ -273,8 +273,8 @@ class MirrorGhosts(Boundary):
     def after_rates(self):
         return self._wall_shear if self.coeffs.wallLaw != "none" else None
 
-    def _wall_shear(self, sim):
-        st = sim.state
+    def _wall_shear(self, run):
+        st = run.state
         gh.wall_shear(st.x, st.y, st.u, st.v, st.kind, self.seg, self.reach, *self._shear,
                       st.ax, st.ay)
 
@@ -291,26 +291,26 @@ class MirrorGhosts(Boundary):
     # a beach, where it happens at nearly every step) and a selected term would not cancel it
     # (``Term.weighted``; the generated maximum of T(3.89) skips massless neighbours, and no
     # term of the registry that sees ghosts is unweighted).
-    def attach(self, sim):
-        if not sim.segments:
+    def attach(self, run):
+        if not run.segments:
             raise ValueError("mirrorGhosts needs walls in system/particleDict")
-        self.reach = sim.pipeline.support_radius
+        self.reach = run.support_radius
         #: ghosts are made within the list radius, for particles projecting within the skin
-        self.build_reach = max(sim.cells.cell_size, self.reach)
+        self.build_reach = max(run.cells.cell_size, self.reach)
         self.margin = self.build_reach - self.reach
-        self.seg = gh.segment_array(sim.segments)
-        self.corners = gh.corner_pairs(sim.segments, 1e-9 * max(1.0, self.reach))
+        self.seg = gh.segment_array(run.segments)
+        self.corners = gh.corner_pairs(run.segments, 1e-9 * max(1.0, self.reach))
         self._ghost = None
         self._active = None
         self.pushed_back = 0
         c = self.coeffs
-        prm = dict(zip(sim.pipeline.module.PARAMS, sim.pipeline.prm.tolist()))
+        prm = run.coefficients()
         #: (Phi table, law, its coefficient) of :func:`sphfoam.models.mirror.wall_shear`
         self._shear = None
         if c.wallLaw != "none":
             coef = {"smooth": prm.get("bnd_wlnu"), "rough": c.ks,
                     "prescribedUPlus": c.UPlus}[c.wallLaw]
-            self._shear = (gh.line_kernel(sim.pipeline.selection.kernel.W, sim.h, self.reach),
+            self._shear = (gh.line_kernel(run.selection.kernel.W, run.h, self.reach),
                            gh.WALL_SHEAR_LAWS[c.wallLaw], float(coef))
         self._hydro = (False, 0.0, 0.0, 1.0, 1.0, 1.0)
         if c.pressure == "hydrostatic":
@@ -322,19 +322,19 @@ class MirrorGhosts(Boundary):
         #: the selected terms that see ghosts and add what a massless neighbour does not
         #: cancel (Term.weighted False): only for them must a dormant ghost stay out of the
         #: support of a fluid particle (the maximum of T(3.89) skips massless neighbours)
-        self.unweighted = [t.who() for t in collect(sim.pipeline.selection.models())
+        self.unweighted = [t.who() for t in collect(run.selection.models())
                            if not t.weighted and set(t.sees) & {"ghost", "all"}]
 
-    def before_neighbours(self, sim):
-        st = sim.state
+    def before_neighbours(self, run):
+        st = run.state
         if (st.kind == GHOST).any():
             st.keep(st.kind != GHOST)
         self._ghost = None
 
-    def add_particles(self, sim, cell):
+    def add_particles(self, run, cell):
         """Mirror every fluid particle near a wall across it (T(3.77)); ghosts that fall
         outside the cell grid are dropped (their particle is at the edge)."""
-        st = sim.state
+        st = run.state
         count = np.zeros(st.n, dtype=np.int64)
         gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.build_reach, count,
                         self.margin)
@@ -353,7 +353,7 @@ class MirrorGhosts(Boundary):
         active = np.ones(ng, dtype=np.bool_)
         gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2, self.seg,
                           self.coeffs.noSlip, active, *self._hydro)
-        gcell, gout = sim.cells.bin(st.x[n0:], st.y[n0:])
+        gcell, gout = run.cells.bin(st.x[n0:], st.y[n0:])
         if gout:
             keep = np.concatenate([np.ones(n0, dtype=bool), gcell >= 0])
             st.keep(keep)
@@ -363,50 +363,50 @@ class MirrorGhosts(Boundary):
         self._active = np.empty(src.shape[0], dtype=np.bool_)
         gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
         self._ghost = (gidx, src, s1, s2)
-        self.before_evaluation(sim)          # dormant ghosts: mass 0
+        self.before_evaluation(run)          # dormant ghosts: mass 0
         return gcell
 
-    def after_sort(self, sim, order):
+    def after_sort(self, run, order):
         inv = np.empty_like(order)
         inv[order] = np.arange(order.size)
         gidx, src, s1, s2 = self._ghost
         self._ghost = (inv[gidx], inv[src], s1, s2)
 
-    def keeps_neighbours(self, sim) -> bool:
+    def keeps_neighbours(self, run) -> bool:
         """Whether the ghosts of the last build still serve this step (see above): the
         active ones are exactly those a rebuild would make, and no dormant one is within
         the support of a fluid particle. Sets which ghosts are active for this step."""
         if self._ghost is None:
             return False
-        st = sim.state
+        st = run.state
         gidx, src, s1, s2 = self._ghost
         n_on = gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
         count = kept_arrays(self, "_count", 1, st.n, np.int64)[0]    # every entry written
         gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
         if int(count.sum()) != n_on:
             return False
-        self.before_evaluation(sim)
+        self.before_evaluation(run)
         if not self.unweighted:
             return True
-        nb_start, nb_idx = sim._nb
+        nb_start, nb_idx = run.neighbours
         return not gh.dormant_ghost_near_fluid(st.x, st.y, st.kind, gidx, self._active,
                                                nb_start, nb_idx,
                                                self.reach ** 2 * (1.0 + 1e-12))
 
-    def before_evaluation(self, sim):
+    def before_evaluation(self, run):
         if self._ghost is not None:
-            st = sim.state
+            st = run.state
             gidx, src, s1, s2 = self._ghost
             gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
                               self.seg, self.coeffs.noSlip, self._active, *self._hydro)
 
-    def walls_moved(self, sim, offsets, velocities):
-        self.seg = gh.segment_array(sim.segments, offsets, velocities)
+    def walls_moved(self, run, offsets, velocities):
+        self.seg = gh.segment_array(run.segments, offsets, velocities)
 
-    def after_step(self, sim):
+    def after_step(self, run):
         """A particle that crossed a mirror wall during the step goes back before anything
         (a write, a function object, the next step) sees it."""
-        st = sim.state
+        st = run.state
         self.pushed_back += gh.push_back(st.x, st.y, st.u, st.v, st.kind, self.seg,
                                          self.reach)
 

@@ -26,12 +26,12 @@ def add_correction(u, du, kind, out):
         out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
 
 
-def corrected_velocity(owner, sim, u, v, du, dv):
+def corrected_velocity(owner, run, u, v, du, dv):
     """(u + du, v + dv) of the fluid particles (walls: u, v) in two arrays ``owner`` keeps
     between calls, so that no step allocates: valid until the owner's next call."""
     buf = kept_arrays(owner, "_advection", 2, u.shape[0], u.dtype)
-    add_correction(u, du, sim.state.kind, buf[0])
-    add_correction(v, dv, sim.state.kind, buf[1])
+    add_correction(u, du, run.state.kind, buf[0])
+    add_correction(v, dv, run.state.kind, buf[1])
     return buf
 
 
@@ -134,12 +134,11 @@ vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
                      applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",),
                      parity="odd")]
 
-    def advection_velocity(self, sim, u, v):
+    def advection_velocity(self, run, u, v):
         """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own)."""
-        pipe = sim.pipeline
-        du = sim.aux[pipe.aux_index("xsph_du")]
-        dv = sim.aux[pipe.aux_index("xsph_dv")]
-        return corrected_velocity(self, sim, u, v, du, dv)
+        du = run.aux("xsph_du")
+        dv = run.aux("xsph_dv")
+        return corrected_velocity(self, run, u, v, du, dv)
 
 
 @register

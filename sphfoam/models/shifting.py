@@ -325,12 +325,11 @@ else:
         c = self.coeffs
         return c.surfaceR is not None and c.surfaceR != c.R
 
-    def advection_velocity(self, sim, u, v):
+    def advection_velocity(self, run, u, v):
         """Positions move with (u, v) + delta_u of the last pre-pass (walls: unchanged)."""
-        pipe = sim.pipeline
-        du = sim.aux[pipe.aux_index("shift_du")]
-        dv = sim.aux[pipe.aux_index("shift_dv")]
-        return corrected_velocity(self, sim, u, v, du, dv)
+        du = run.aux("shift_du")
+        dv = run.aux("shift_dv")
+        return corrected_velocity(self, run, u, v, du, dv)
 
     # the corrections' hooks exist only where they are selected (a model the case does not
     # select costs nothing: no call per evaluation)
@@ -343,21 +342,21 @@ else:
     def after_density_rate(self):
         return self._add_density_rate if self.coeffs.correctDensity else None
 
-    def _add_rates(self, sim):
+    def _add_rates(self, run):
         """With ``correctVelocity``: du_a/dt += (delta_u_a . grad) u_a; with
         ``correctDensity``: drho_a/dt += delta_u_a . grad rho_a; both from the pre-pass of this
         evaluation (zero for walls)."""
-        pipe, st = sim.pipeline, sim.state
+        st = run.state
         if self.coeffs.correctVelocity:
-            add_rate(st.ax, sim.aux[pipe.aux_index("shift_ax")])
-            add_rate(st.ay, sim.aux[pipe.aux_index("shift_ay")])
+            add_rate(st.ax, run.aux("shift_ax"))
+            add_rate(st.ay, run.aux("shift_ay"))
         if self.coeffs.correctDensity:
-            add_rate(st.drho, sim.aux[pipe.aux_index("shift_drho")])
+            add_rate(st.drho, run.aux("shift_drho"))
 
-    def _add_density_rate(self, sim):
+    def _add_density_rate(self, run):
         """With ``correctDensity``: the density-only pass gets delta_u . grad rho too, from
         the last pre-pass (whose delta_u moved the particles since)."""
-        add_rate(sim.state.drho, sim.aux[sim.pipeline.aux_index("shift_drho")])
+        add_rate(run.state.drho, run.aux("shift_drho"))
 
 
 @register

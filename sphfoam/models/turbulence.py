@@ -307,23 +307,23 @@ if ml_det > 0.1:                                   # grad v = G L^-1 (exact for 
         return {**out, **self.wall_law_params(ctx)}
 
     # --- run-time hooks: the wall distance of the moved particles ----------------------------
-    def attach(self, sim):
-        if not sim.segments:
+    def attach(self, run):
+        if not run.segments:
             raise CaseError.single("system/particleDict", "walls",
                                    "turbulence mixingLength measures its mixing length from "
                                    "the walls, and there are none")
-        self._seg = segment_array(sim.segments)
-        self._update(sim)
+        self._seg = segment_array(run.segments)
+        self._update(run)
 
-    def walls_moved(self, sim, offsets, velocities):
-        self._seg = segment_array(sim.segments, offsets, velocities)
+    def walls_moved(self, run, offsets, velocities):
+        self._seg = segment_array(run.segments, offsets, velocities)
 
-    def before_neighbours(self, sim):
-        self._update(sim)
+    def before_neighbours(self, run):
+        self._update(run)
 
-    def keeps_neighbours(self, sim):
+    def keeps_neighbours(self, run):
         return True
 
-    def _update(self, sim):
-        st = sim.state
+    def _update(self, run):
+        st = run.state
         line_distance(st.x, st.y, self._seg, st.extra["lineDist"])

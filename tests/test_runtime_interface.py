@@ -1,0 +1,93 @@
+"""The narrow runtime interface of contract v2 (issue 32): models reach a running simulation
+only through the public :class:`~sphfoam.engine.context.RunContext` their hooks receive, and
+their term code calls only helpers a device can compile."""
+
+from __future__ import annotations
+
+import inspect
+import re
+from pathlib import Path
+
+import pytest
+
+from sphfoam import registry
+
+MODELS = Path(__file__).resolve().parent.parent / "sphfoam" / "models"
+
+
+def _module_texts():
+    return {p.name: p.read_text() for p in sorted(MODELS.glob("*.py"))}
+
+
+def test_models_reach_no_private_state_of_the_engine():
+    """No model reads the simulation's private state (``sim._nb``, ``run._x``) or the
+    generated module (``.module.``): the hooks' context names what they may see."""
+    bad = []
+    for name, text in _module_texts().items():
+        for i, line in enumerate(text.splitlines(), 1):
+            code = line.split("#", 1)[0]
+            if re.search(r"\b(sim|run)\._\w", code) or ".module." in code or \
+                    re.search(r"\bsim\.pipeline\b|\brun\.pipeline\b", code):
+                bad.append(f"{name}:{i}: {line.strip()}")
+    assert not bad, "\n".join(bad)
+
+
+def test_hooks_receive_the_run_context(tutorial):
+    """Every hook of a selected model is called with the RunContext, not the Simulation."""
+    import sphfoam
+    from sphfoam.engine.context import RunContext
+
+    d = tutorial("damBreak", {"system/particleDict:dx": 0.04,
+                              "system/controlDict:functions": {},
+                              "constant/sphProperties:velocityCorrection": {"type": "xsph"}})
+    seen = []
+    from sphfoam.models.corrections import XSPH
+
+    original = XSPH.advection_velocity
+
+    def spy(self, run, u, v):
+        seen.append(type(run))
+        return original(self, run, u, v)
+
+    XSPH.advection_velocity = spy
+    try:
+        sphfoam.run(sphfoam.Case(d), end_time=0.002)
+    finally:
+        XSPH.advection_velocity = original
+    assert seen and all(t is RunContext for t in seen)
+
+
+def _imported_helpers():
+    """(model, helper) for every jitted helper a registered pipeline model imports into
+    its term code (``imports()``)."""
+    import importlib
+
+    out = []
+    for family in registry.FAMILIES:
+        for name in registry.names(family):
+            try:
+                m = registry.build(family, {"type": name})
+            except Exception:  # noqa: BLE001  (models that need coefficients: skipped)
+                continue
+            for line in getattr(m, "imports", lambda: [])():
+                if line.strip() == "import math":       # device functions have math
+                    continue
+                mod, names = line.replace("from ", "", 1).split(" import ")
+                module = importlib.import_module(mod.strip())
+                for item in names.split(","):
+                    real = item.split(" as ")[0].strip()
+                    out.append((f"{family} {name!r}", real, getattr(module, real)))
+    return out
+
+
+@pytest.mark.parametrize("who, name, fn", _imported_helpers(),
+                         ids=lambda v: v if isinstance(v, str) else "")
+def test_term_helpers_are_device_compilable(who, name, fn):
+    """A helper that term code calls is a plain jitted scalar function: not parallel, no
+    prange, no allocation, no printing, so that a device backend can compile it as a device
+    function."""
+    assert hasattr(fn, "py_func"), f"{who}: {name} is not a jitted function"
+    assert not fn.targetoptions.get("parallel"), f"{who}: {name} is parallel"
+    src = inspect.getsource(fn.py_func)
+    for host in ("prange", "np.empty", "np.zeros", "np.ones", "print(", "np.array("):
+        assert host not in src, f"{who}: {name} calls {host} (host only)"
