@@ -146,6 +146,26 @@ class FakeSim:
     def eos(self):
         pass
 
+    # --- what an integrator's step sees (sphfoam.engine.stepping.StepContext) ----------
+    def evaluate(self):
+        self.eos()
+        self.rates()
+
+    def evaluate_density(self):
+        self.density_rate()
+
+    def advect(self):
+        st = self.state
+        self._advection = self.position_velocity(st.u, st.v)
+
+    def update(self, name, **scalars):
+        from sphfoam.engine.updates import ParticleUpdates
+
+        if getattr(self, "_updates", None) is None or \
+                self._updates.integrator is not self.integrator:
+            self._updates = ParticleUpdates(self.integrator)
+        self._updates.run(name, self.state, self._advection, scalars)
+
     def move_walls(self, t):
         pass
 
@@ -171,6 +191,7 @@ class FakeSim:
 
     def step(self, dt_remaining=math.inf):
         dt = self.integrator.step(self, dt_remaining)
+        self.last_dt = dt
         self.time += dt
         self.step_index += 1
         return dt

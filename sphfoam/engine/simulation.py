@@ -15,6 +15,7 @@ from numba import njit, prange
 from sphfoam.engine.context import RunContext
 from sphfoam.engine.neighbours import REDUCTION_CHUNKS, CellList, displacement_check, permute
 from sphfoam.engine.state import FLUID, ParticleState
+from sphfoam.engine.stepping import StepContext
 from sphfoam.engine.timestep import stable_time_step_into
 
 
@@ -60,6 +61,10 @@ class Simulation:
         if state.dtype != self.dtype:
             state.set_precision(self.dtype)
         self.integrator = integrator
+        #: the integrator's particle updates, compiled (None until its first step)
+        self.updates = None
+        #: the velocity positions move with, as the integrator's last ``advect`` made it
+        self._pU = None
         #: the smoothing length and support radius are the pipeline's (one source of truth);
         #: ``h`` and ``support`` (in units of h), when given, must agree with them
         self.h = pipeline.h
@@ -140,6 +145,8 @@ class Simulation:
         self.reuse_neighbours = all(m.implements("keeps_neighbours") for m in changers)
         #: what the models' hooks see of this simulation (never the simulation itself)
         self.context = RunContext(self)
+        #: what the integrator's step sees of it
+        self._stepping = StepContext(self)
         for attach in sel.hooks("attach"):
             attach(self.context)
 
@@ -291,6 +298,20 @@ class Simulation:
             u, v = advection(self.context, u, v)
         return u, v
 
+    def advect(self):
+        """The velocity positions move with from the velocity now (``pU@`` of the
+        integrators' updates)."""
+        st = self.state
+        self._pU = self.position_velocity(st.u, st.v)
+
+    def run_update(self, name: str, scalars: dict):
+        """The integrator's particle update ``name`` (``sphfoam.engine.stepping``)."""
+        if self.updates is None or self.updates.integrator is not self.integrator:
+            from sphfoam.engine.updates import ParticleUpdates
+
+            self.updates = ParticleUpdates(self.integrator)
+        self.updates.run(name, self.state, self._pU, scalars)
+
     def filter_density(self):
         """Run the density filter's pass (T(3.64)-(3.69)); the caller decides when."""
         st = self.state
@@ -363,10 +384,12 @@ class Simulation:
         self._prepassed = False
         self._evaluations = 0
         try:
-            dt = self.integrator.step(self, dt_remaining)
+            dt = self.integrator.step(self._stepping, dt_remaining)
         finally:
             self._prepassed = None
             self._evaluations = None
+            self._pU = None
+        self.last_dt = dt               # the simulation owns the time and the step
         self.time += dt
         self.step_index += 1
         self._run_hooks("after_step")

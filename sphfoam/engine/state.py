@@ -12,7 +12,7 @@ FLUID, WALL, GHOST = 0, 1, 2
 PERSISTENT_F8 = ("x", "y", "u", "v", "rho", "m")
 PERSISTENT_I8 = ("kind", "id")
 #: per-step work arrays (recomputed, never written)
-SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma", "u_half", "v_half")
+SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma")
 
 #: arrays held in the working precision (``sphSchemes`` ``precision``): everything but the
 #: positions, the kind/id and the extra fields, which stay double (positions as DualSPHysics
