@@ -91,3 +91,38 @@ def test_term_helpers_are_device_compilable(who, name, fn):
     src = inspect.getsource(fn.py_func)
     for host in ("prange", "np.empty", "np.zeros", "np.ones", "print(", "np.array("):
         assert host not in src, f"{who}: {name} calls {host} (host only)"
+
+
+def _integrators():
+    return [registry.build("integrator", {"type": n}) for n in registry.names("integrator")]
+
+
+@pytest.mark.parametrize("integ", _integrators(), ids=lambda m: m.name)
+def test_integrators_are_declared_updates_the_backend_runs(integ):
+    """An integrator declares its per-particle updates (no compiled loop of its own: the
+    backend compiles them) and names only the contract's arrays; written once with ``@``,
+    each expands to two and to three components."""
+    import ast
+
+    from sphfoam.engine.emit_cpu import generate_updates
+    from sphfoam.engine.stepping import arrays_of
+    from sphfoam.engine.updates import ParticleUpdates
+
+    text = (MODELS / "integrators.py").read_text()
+    assert "prange" not in text and "@njit" not in text
+    assert integ.updates
+    ParticleUpdates(integ)              # refuses an array that is not the contract's
+    for upd in integ.updates:
+        a2, a3 = arrays_of(upd, 2), arrays_of(upd, 3)
+        if "x" in a2:
+            assert "z" in a3 and "z" not in a2
+        if "u" in a2:
+            assert "w" in a3
+    ast.parse(generate_updates(integ, 3))
+
+
+def test_the_simulation_owns_the_time_step():
+    """No integrator writes the simulation's time or step: ``step`` returns what it
+    advanced and the simulation keeps it (``Simulation.last_dt``)."""
+    text = (MODELS / "integrators.py").read_text()
+    assert "last_dt" not in text and ".time +=" not in text
