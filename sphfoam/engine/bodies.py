@@ -31,9 +31,8 @@ def _indent(code: str, n: int = 4) -> str:
 
 #: per-neighbour loads every pair loop makes (engine quantities; see sphfoam.engine.terms)
 _NEIGHBOUR_LOAD = """\
-u_ab = ua - u[b]
-v_ab = va - v[b]
-vdotr = u_ab * dx_ab + v_ab * dy_ab
+U@_ab = U@a - U@[b]
+vdotr = {vdotr}
 rhob = rho[b]
 pb = p[b]
 cb = c[b]
@@ -42,10 +41,8 @@ kindb = kind[b]
 """
 
 _PARTICLE_LOAD = """\
-xa = x[a]
-ya = y[a]
-ua = u[a]
-va = v[a]
+@a = @[a]
+U@a = U@[a]
 rhoa = rho[a]
 pa = p[a]
 ca = c[a]
@@ -63,9 +60,7 @@ if want_sigma:
 _LIST = """\
 for k in range(nb_start[a], nb_start[a + 1]):
     b = nb_idx[k]
-    dx_ab = {dx}
-    dy_ab = {dy}
-{wrap}    r2 = dx_ab * dx_ab + dy_ab * dy_ab
+{rel}{wrap}    r2 = {r2}
     if r2 >= support2 or r2 == 0.0:   # beyond the support now, or coincident (grad W = 0)
         continue
     q = math.sqrt(r2) * inv_h
@@ -76,9 +71,7 @@ for k in range(nb_start[a], nb_start[a + 1]):
 _HALF = """\
 for k in range(half[a], nb_start[a + 1]):
     b = nb_idx[k]
-    dx_ab = {dx}
-    dy_ab = {dy}
-    r2 = dx_ab * dx_ab + dy_ab * dy_ab
+{rel}    r2 = {r2}
     if r2 >= support2 or r2 == 0.0:   # beyond the support now, or coincident (grad W = 0)
         continue
     q = math.sqrt(r2) * inv_h
@@ -119,6 +112,39 @@ if want_sigma:
     out_sigma[b] = max(out_sigma[b], s_ab)"""
 
 
+#: the components of each dimension: (axis, velocity)
+COMPONENTS = (("x", "u"), ("y", "v"), ("z", "w"))
+
+
+def components(dim: int):
+    """(axis, velocity) of each component in ``dim`` dimensions."""
+    if dim not in (2, 3):
+        raise ValueError(f"dimension {dim}: valid are 2, 3")
+    return COMPONENTS[:dim]
+
+
+def expand(code: str, dim: int = 2) -> str:
+    """``code`` with its ``@`` lines written once per component (``sphfoam.engine.terms``)."""
+    return T.expand_components(code, components(dim)) if code else ""
+
+
+def sum_over(template: str, dim: int = 2) -> str:
+    """``template`` summed over the components, left to right: ``sum_over("U@_ab * d@_ab")``
+    is ``u_ab * dx_ab + v_ab * dy_ab`` in two dimensions."""
+    return " + ".join(template.replace("U@", vel).replace("@", ax)
+                      for ax, vel in components(dim))
+
+
+def particle_load(dim: int = 2) -> str:
+    """a's state, loaded once per particle."""
+    return expand(_PARTICLE_LOAD, dim)
+
+
+def neighbour_load(dim: int = 2) -> str:
+    """b's state and the pair's velocity difference, loaded once per neighbour."""
+    return expand(_NEIGHBOUR_LOAD.format(vdotr=sum_over("U@_ab * d@_ab", dim)), dim) + "\n"
+
+
 class LoopBodies:
     """The code of each loop's body for one particle ``a``, from ``plan``."""
 
@@ -126,9 +152,21 @@ class LoopBodies:
         if precision not in ("double", "single"):
             raise ValueError(f"precision {precision!r}: valid are double, single")
         self.plan = plan
+        #: the dimension of the case: every ``@`` is expanded to its components
+        self.dim = plan.sel.dim
         #: "single": the pairs' relative positions, formed from double positions, are
         #: rounded to float32 (``F4``) where the loops form them
         self.precision = precision
+
+    def _x(self, code: str) -> str:
+        """``code`` expanded to the components of the case's dimension."""
+        return expand(code, self.dim)
+
+    def _pair_geometry(self) -> dict:
+        """The relative position of the pair (one line per component, in the working
+        precision) and r2, for the list loop templates."""
+        rel = "".join(f"    d{ax}_ab = {self.relative(ax)}\n" for ax, _ in components(self.dim))
+        return dict(rel=rel, r2=sum_over("d@_ab * d@_ab", self.dim))
 
     def relative(self, axis: str) -> str:
         """The relative position of the pair along ``axis`` (x[a] - x[b]), in the working
@@ -166,10 +204,10 @@ class LoopBodies:
                     if n in self.plan.cache:
                         code = re.sub(rf"(?m)^{re.escape(n)} = .*$", f"{n} = pc[J_{n}, k]",
                                       code)
-            pre_code.append(expand_components(code) if code else "")
+            pre_code.append(self._x(code) if code else "")
         if cache == "store":
             pre_code += [f"pc[J_{n}, k] = {n}" for n in self.plan.cache]
-        code = _NEIGHBOUR_LOAD + "\n".join(x for x in pre_code if x)
+        code = neighbour_load(self.dim) + "\n".join(x for x in pre_code if x)
         disp = self._dispatch(rest)
         if disp:
             code += "\n" + disp
@@ -186,7 +224,7 @@ class LoopBodies:
         sees = {id(t): self.plan.sees(t) for t in rest}
         alls = [t for t in rest if "all" in sees[id(t)]]
         if alls:
-            return "\n".join(expand_components(getattr(t, part)) for t in rest
+            return "\n".join(self._x(getattr(t, part)) for t in rest
                              if getattr(t, part))
         per_kind = {k: [t for t in rest if k in sees[id(t)] and getattr(t, part)]
                     for k in self.plan.kinds}
@@ -202,7 +240,7 @@ class LoopBodies:
         if not groups:
             return ""
         if len(groups) == 1 and set(groups[0][0]) == set(self.plan.kinds) and self.plan.complete:
-            return "\n".join(expand_components(getattr(t, part)) for t in groups[0][1])
+            return "\n".join(self._x(getattr(t, part)) for t in groups[0][1])
         order = list(self.plan.kinds)
         out = []
         for gi, (ks, ts) in enumerate(groups):
@@ -214,7 +252,7 @@ class LoopBodies:
                 if excl:
                     c = f"({c}) and not ({' or '.join(excl)})"
                 conds.append(c)
-            body = "\n".join(expand_components(getattr(t, part)) for t in ts)
+            body = "\n".join(self._x(getattr(t, part)) for t in ts)
             kw = "if" if gi == 0 else "elif"
             covered = {j for g in groups for j in g[0]} == set(self.plan.kinds)
             if gi == len(groups) - 1 and gi > 0 and covered and self.plan.complete:
@@ -224,26 +262,24 @@ class LoopBodies:
         return "\n".join(out)
 
     def _wrap(self) -> str:
-        sel = self.plan.sel
+        """The relative position wrapped to the nearest image along each periodic axis."""
         wrap = ""
-        if sel.periodic_x:
-            wrap += ("if dx_ab > half_lx:\n    dx_ab -= lx\nelif dx_ab < -half_lx:\n"
-                     "    dx_ab += lx\n")
-        if sel.periodic_y:
-            wrap += ("if dy_ab > half_ly:\n    dy_ab -= ly\nelif dy_ab < -half_ly:\n"
-                     "    dy_ab += ly\n")
+        for ax, _ in components(self.dim):
+            if self.plan.sel.periodic(ax):
+                wrap += (f"if d{ax}_ab > half_l{ax}:\n    d{ax}_ab -= l{ax}\n"
+                         f"elif d{ax}_ab < -half_l{ax}:\n    d{ax}_ab += l{ax}\n")
         return wrap
 
     def pair_loop(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """The loop over the neighbour list of particle ``a`` with ``terms`` for each b."""
         wrap = self._wrap()
         cache = cache if self.plan.cache else None
-        return _LIST.format(dx=self.relative("x"), dy=self.relative("y"),
+        return _LIST.format(**self._pair_geometry(),
                             wrap=_block(wrap, 4) + ("\n" if wrap else ""),
                             body=_block(self.neighbour_body(terms, sigma, cache), 4))
 
     def particle_code(self, terms: list, part: str) -> str:
-        return "\n".join(expand_components(getattr(t, part)) for t in terms
+        return "\n".join(self._x(getattr(t, part)) for t in terms
                          if getattr(t, part))
 
     def gather(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
@@ -270,9 +306,9 @@ class LoopBodies:
         sums = self.plan.prepass_half_sums()
         body = [self.neighbour_body(ts, cache="store" if self.plan.cache else None),
                 "\n".join(f"{n}_b = 0.0" for n in sums),
-                "\n".join(expand_components(t.reaction) for t in ts if t.reaction),
+                "\n".join(self._x(t.reaction) for t in ts if t.reaction),
                 "\n".join(f"hs[S_{n}, b] += {n}_b" for n in sums)]
-        loop = _HALF.format(dx=self.relative("x"), dy=self.relative("y"),
+        loop = _HALF.format(**self._pair_geometry(),
                             body=_block("\n".join(body), 4))
         return "\n".join((self.particle_code(ts, "init"), loop,
                           "\n".join(f"hs[S_{n}, a] += {n}" for n in sums)))
@@ -337,7 +373,7 @@ class LoopBodies:
                         code = re.sub(rf"(?m)^{re.escape(n)} = .*$", f"{n} = pc[J_{n}, k]",
                                       code)
             if code:
-                pre_code.append(expand_components(code))
+                pre_code.append(self._x(code))
         own = [t for t in fluid if not t.on_demand and not t.corrects]
         own_wet = [t for t in wet if not t.on_demand and not t.corrects]
         common = []
@@ -376,12 +412,12 @@ class LoopBodies:
             # (rho_a rho_b, Pi_ab, the reciprocals)
             pair_code = ("if kinda == FLUID and kindb == FLUID:\n" + _indent(ff)
                          + "\nelse:\n" + _indent(pair_code))
-        body = [_NEIGHBOUR_LOAD + "\n".join(pre_code),
-                "acc_b_x = 0.0\nacc_b_y = 0.0\ndrho_b = 0.0", pair_code]
+        body = [neighbour_load(self.dim) + "\n".join(pre_code),
+                self._x("acc_b_@ = 0.0\ndrho_b = 0.0"), pair_code]
         if stage == "rates":
-            body.append("out_ax[b] += acc_b_x\nout_ay[b] += acc_b_y")
+            body.append(self._x("out_a@[b] += acc_b_@"))
         body.append("out_drho[b] += drho_b")
-        loop = _HALF.format(dx=self.relative("x"), dy=self.relative("y"),
+        loop = _HALF.format(**self._pair_geometry(),
                             body=_block("\n".join(body), 4))
         init = self.particle_code(terms, "init")
         return "\n".join(x for x in (init, loop) if x)
@@ -395,18 +431,18 @@ class LoopBodies:
         # the force coefficients (Term.force, F_ab = F_ba) summed into one, applied once per
         # side, where the first of them stood
         forces = [t for t in ts if t.force]
-        fold_a = expand_components("f_ab = " + " + ".join(f"({t.force})" for t in forces)
+        fold_a = self._x("f_ab = " + " + ".join(f"({t.force})" for t in forces)
                                    + "\nacc_@ -= mb * f_ab * gW@") if len(forces) > 1 else ""
-        fold_b = expand_components("acc_b_@ += ma * f_ab * gW@") if fold_a else ""
+        fold_b = self._x("acc_b_@ += ma * f_ab * gW@") if fold_a else ""
         code, code_b = [], []
         for t in ts:
             folded = fold_a and t.force
             if t.pair and not folded:
-                code.append(expand_components(t.pair))
+                code.append(self._x(t.pair))
             elif folded and t is forces[0]:
                 code.append(fold_a)
             if t.reaction and not folded:
-                code_b.append(expand_components(t.reaction))
+                code_b.append(self._x(t.reaction))
             elif folded and t is forces[0]:
                 code_b.append(fold_b)
         code += code_b
@@ -414,6 +450,3 @@ class LoopBodies:
             code.append(_SIGMA_FF)
         return "\n".join(code)
 
-
-def expand_components(code: str) -> str:
-    return T.expand_components(code) if code else ""

@@ -21,7 +21,7 @@ import numpy as np
 from sphfoam._version import __version__
 from sphfoam.cachedir import cache_root
 from sphfoam.engine.emit_cpu import generate_source, generate_updates
-from sphfoam.engine.pipeline import CORE_PARAMS, Pipeline
+from sphfoam.engine.pipeline import Pipeline, core_param_names
 from sphfoam.engine.plan import Selection
 
 
@@ -36,7 +36,8 @@ def _package_fingerprint() -> str:
     return hsh.hexdigest()
 
 
-def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> dict:
+def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0, 0.0),
+                    domain_hi=(1.0, 1.0, 1.0)) -> dict:
     """h, 1/h, the squared support radius, the eta^2 guard of T(3.32), gravity and, for periodic
     axes, the periods: the single source of these for the pipeline, set-up, sampling and
     benchmarks (all from the selected kernel and the case context)."""
@@ -44,31 +45,32 @@ def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0), domain_hi=(1.0, 1
     support = ctx.support or sel.kernel.support_radius(h)   # the case context's, if set
     core = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=ctx.eta2,
                 gx=ctx.g[0], gy=ctx.g[1])
-    if sel.periodic_x:
-        core["lx"] = float(domain_hi[0] - domain_lo[0])
-    if sel.periodic_y:
-        core["ly"] = float(domain_hi[1] - domain_lo[1])
+    if sel.dim == 3:
+        core["gz"] = ctx.g[2] if len(ctx.g) > 2 else 0.0
+    for i, axis in enumerate("xyz"[:sel.dim]):
+        if sel.periodic(axis):
+            core[f"l{axis}"] = float(domain_hi[i] - domain_lo[i])
     return core
 
 
 def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
-                   domain_lo=(0.0, 0.0), domain_hi=(1.0, 1.0)) -> Pipeline:
+                   domain_lo=(0.0, 0.0, 0.0), domain_hi=(1.0, 1.0, 1.0)) -> Pipeline:
     """Generate (or reuse) the module for ``sel``, import it and compile it.
 
-    ``core`` (h, inv_h, support2, eta2, gx, gy and, for periodic axes, lx and ly) defaults to
+    ``core`` (h, inv_h, support2, eta2, gravity and, for periodic axes, lx, ly, lz) defaults to
     :func:`core_parameters` of ``sel`` and ``ctx``; given, it must agree with them.
     """
     derived = core_parameters(sel, ctx, domain_lo, domain_hi)
     if core is None:
         core = derived
     else:
-        for k in CORE_PARAMS:
+        for k in core_param_names(sel.dim):
             if not np.isclose(float(core[k]), derived[k], rtol=1e-12, atol=0.0):
                 raise ValueError(f"core parameter {k} = {core[k]!r} differs from the one the "
                                  f"selection and case context give ({derived[k]!r})")
-    params: dict[str, float] = {k: float(core[k]) for k in CORE_PARAMS}
-    for axis, on in (("x", sel.periodic_x), ("y", sel.periodic_y)):
-        if on:
+    params: dict[str, float] = {k: float(core[k]) for k in core_param_names(sel.dim)}
+    for axis in "xyz"[:sel.dim]:
+        if sel.periodic(axis):
             params[f"l{axis}"] = float(core[f"l{axis}"])
             params[f"half_l{axis}"] = 0.5 * float(core[f"l{axis}"])
     for mdl in sel.models():
@@ -93,8 +95,9 @@ def _warm_up(module, prm):
     n = 2
     dt = prm.dtype               # the working precision (positions and fields: double)
     f = np.zeros(n, dtype=dt)
+    dim = getattr(module, "DIM", 2)
     x = np.array([0.0, 0.5 * float(prm[0])])
-    y = np.zeros(n)
+    coords = (x, *(np.zeros(n) for _ in range(dim - 1)))
     kind = np.zeros(n, dtype=np.int64)
     m = np.ones(n, dtype=dt)
     rho = np.full(n, 1000.0, dtype=dt)
@@ -103,20 +106,22 @@ def _warm_up(module, prm):
     fld = np.zeros((len(module.FIELDS), n))
     module.equation_of_state(rho, f.copy(), f.copy(), prm)
     count = np.zeros(n, dtype=np.int64)
-    grid = (x, y, kind, False, cell_start, -1.0, -1.0, 1e-3, 1, 1, prm,
-            float(prm[0]) ** 2 * 16.0)
+    cells = (-1.0, -1.0, 1e-3, 1, 1) if dim == 2 else (-1.0, -1.0, -1.0, 1e-3, 1, 1, 1)
+    grid = (*coords, kind, False, cell_start, *cells, prm, float(prm[0]) ** 2 * 16.0)
     module.count_neighbours(*grid, count)
-    # sized from the count: with periodic axes the single cell is walked 3 x 3 times, so
-    # each particle finds its neighbour up to nine times (a fixed list of two overflowed)
+    # sized from the count: with periodic axes the single cell is walked 3 x 3 (x 3)
+    # times, so each particle finds its neighbour up to 9 (27) times (a fixed list of two
+    # overflowed)
     nb_start = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
     nb_idx = np.zeros(int(nb_start[-1]), dtype=np.uint32)
     module.fill_neighbours(*grid, nb_start, nb_idx)
-    args = (x, y, f, f, rho, f, f, m, kind, nb_start, nb_idx, prm, aux, fld)
+    args = (*coords, *(f for _ in range(dim)), rho, f, f, m, kind, nb_start, nb_idx, prm,
+            aux, fld)
     if getattr(module, "PAIR_CACHE", ()):
         args += (np.zeros((len(module.PAIR_CACHE), nb_idx.shape[0]), dtype=dt),)
     funcs = [module.equation_of_state, module.count_neighbours, module.fill_neighbours,
              module.rates, module.density_rate]
-    module.rates(*args, f.copy(), f.copy(), f.copy(), f.copy())
+    module.rates(*args, *(f.copy() for _ in range(dim)), f.copy(), f.copy())
     module.density_rate(*args, f.copy())
     if hasattr(module, "prepass"):
         module.prepass(*args)
@@ -130,7 +135,7 @@ def _warm_up(module, prm):
     # [nb_mid | band starts | the bands' dealt order | nb]: one band of both particles
     half = np.array([0] * n + [0, n, 0, 1], dtype=np.uint32)
     if hasattr(module, "rates_half"):
-        module.rates_half(*args, half, f.copy(), f.copy(), f.copy(), f.copy())
+        module.rates_half(*args, half, *(f.copy() for _ in range(dim)), f.copy(), f.copy())
         funcs.append(module.rates_half)
     if hasattr(module, "density_half"):
         module.density_half(*args, half, f.copy())

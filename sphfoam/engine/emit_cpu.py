@@ -14,7 +14,7 @@ from __future__ import annotations
 import ast
 
 from sphfoam._version import __version__
-from sphfoam.engine.bodies import _PARTICLE_LOAD, LoopBodies, _block, _indent
+from sphfoam.engine.bodies import LoopBodies, _block, _indent, components, expand, particle_load, sum_over
 from sphfoam.engine.fastmath import FASTMATH_SOURCE
 from sphfoam.engine.plan import Plan, Selection
 
@@ -32,9 +32,9 @@ for colour in range(2):
 {body}"""
 
 
-def _half_bands(*parts: str) -> str:
+def _half_bands(dim: int, *parts: str) -> str:
     """``_HALF_BANDS`` with ``parts`` (code of particle a) as the body."""
-    body = "\n".join([_block(_PARTICLE_LOAD, 0), "ma = m[a]\nkinda = kind[a]",
+    body = "\n".join([particle_load(dim), "ma = m[a]\nkinda = kind[a]",
                       *(_block(x, 0) for x in parts)])
     return _HALF_BANDS.format(body=_block(body, 12))
 
@@ -83,6 +83,85 @@ for cy0 in range({ylo}, {yhi}):
 """
 
 
+#: the 3 x 3 x 3 cell walk in three dimensions (cells numbered (cz ncy + cy) ncx + cx)
+_CELLS_3D = """\
+ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)
+iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)
+iz = min(max(int((za - z0) * inv_cell), 0), ncz - 1)
+for cz0 in range({zlo}, {zhi}):
+    cz = {cz}
+    for cy0 in range({ylo}, {yhi}):
+        cy = {cy}
+        for cx0 in range({xlo}, {xhi}):
+            cx = {cx}
+            cc = (cz * ncy + cy) * ncx + cx
+            for b in range(cell_start[cc], cell_start[cc + 1]):
+                dx_ab = xa - x[b]
+                dy_ab = ya - y[b]
+                dz_ab = za - z[b]
+{wrap}                r2 = dx_ab * dx_ab + dy_ab * dy_ab + dz_ab * dz_ab
+                if r2 >= reach2 or b == a{keep}:
+                    continue
+{body}
+"""
+
+#: the same where x is not periodic: the three cells of a row along x, one range
+_CELLS_ROWS_3D = """\
+ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)
+iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)
+iz = min(max(int((za - z0) * inv_cell), 0), ncz - 1)
+cx_lo = max(ix - 1, 0)
+cx_hi = min(ix + 2, ncx)
+for cz0 in range({zlo}, {zhi}):
+    cz = {cz}
+    for cy0 in range({ylo}, {yhi}):
+        row = (cz * ncy + {cy}) * ncx
+        lo = cell_start[row + cx_lo]
+        hi = cell_start[row + cx_hi]
+        xs = x[lo:hi]
+        ys = y[lo:hi]
+        zs = z[lo:hi]
+{kslice}        for j in range(hi - lo):
+            b = lo + j
+            dx_ab = xa - xs[j]
+            dy_ab = ya - ys[j]
+            dz_ab = za - zs[j]
+{wrap}            r2 = dx_ab * dx_ab + dy_ab * dy_ab + dz_ab * dz_ab
+            ok = (r2 < reach2){notself}{keep}
+{body}
+"""
+
+
+def _axis_range(per: bool, i: str, n: str, name: str):
+    """The cell range of one axis around index ``i`` (wrapped where periodic)."""
+    if per:
+        return f"{i} - 1", f"{i} + 2", f"{name}0 % {n}"
+    return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
+
+
+def _cell_walk_3d(bodies, body: str, rows: str | None, count: bool) -> str:
+    sel = bodies.plan.sel
+    wrap = bodies._wrap()
+    xlo, xhi, cx = _axis_range(sel.periodic_x, "ix", "ncx", "cx")
+    ylo, yhi, cy = _axis_range(sel.periodic_y, "iy", "ncy", "cy")
+    zlo, zhi, cz = _axis_range(sel.periodic_z, "iz", "ncz", "cz")
+    fo = bodies.plan.fluid_pairs_only
+    if rows is not None and not sel.periodic_x:
+        notself = "" if count and bodies.plan.counts_self() else " & (b != a)"
+        cy = "(cy0 % ncy)" if sel.periodic_y else "cy0"
+        return _CELLS_ROWS_3D.format(ylo=ylo, yhi=yhi, cy=cy, zlo=zlo, zhi=zhi, cz=cz,
+                                     notself=notself,
+                                     keep=" & (fluid_a | (ks[j] == FLUID))" if fo else "",
+                                     kslice="        ks = kind[lo:hi]\n" if fo else "",
+                                     wrap=_block(wrap, 12) + ("\n" if wrap else ""),
+                                     body=_block(rows, 12))
+    return _CELLS_3D.format(xlo=xlo, xhi=xhi, ylo=ylo, yhi=yhi, zlo=zlo, zhi=zhi, cx=cx,
+                            cy=cy, cz=cz,
+                            keep=(" or not (fluid_a or kind[b] == FLUID)" if fo else ""),
+                            wrap=_block(wrap, 16) + ("\n" if wrap else ""),
+                            body=_block(body, 16))
+
+
 def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -> str:
     """The 3 x 3 cell gather around particle ``a`` (within ``reach2``), for the list:
     ``body`` for each b within reach, or, where x is not periodic, ``rows`` for every
@@ -90,6 +169,8 @@ def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -
     ``ok`` true for those within reach (and, for ``count`` where ``counts_self``, for a
     itself)."""
     sel = bodies.plan.sel
+    if sel.dim == 3:
+        return _cell_walk_3d(bodies, body, rows, count)
     if rows is not None and not sel.periodic_x:
         ylo, yhi, cy = (("iy - 1", "iy + 2", "(cy0 % ncy)") if sel.periodic_y
                         else ("max(iy - 1, 0)", "min(iy + 2, ncy)", "cy0"))
@@ -117,7 +198,10 @@ def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -
                          body=_block(body, 12))
 
 
-_ARGS_BASE = "x, y, u, v, rho, p, c, m, kind, nb_start, nb_idx, prm, aux, fld"
+def _args_base(dim: int) -> str:
+    """The arguments every loop over particles takes: positions, velocities, the state."""
+    return ", ".join([*(ax for ax, _ in components(dim)), *(v for _, v in components(dim)),
+                      "rho, p, c, m, kind, nb_start, nb_idx, prm, aux, fld"])
 
 
 def generate_source(sel: Selection, param_names: list[str]) -> str:
@@ -134,7 +218,14 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     cache = plan.cache
     cache_const = "".join(f"\nJ_{a} = {i}" for i, a in enumerate(cache))
     #: the arguments of every loop over pairs (``pc``: the per-pair cache, when there is one)
-    _ARGS = _ARGS_BASE + (", pc" if cache else "")
+    dim = sel.dim
+    _ARGS = _args_base(dim) + (", pc" if cache else "")
+    X = ", ".join(ax for ax, _ in components(dim))            # the positions' arrays
+    grid = ("x0, y0, inv_cell, ncx, ncy" if dim == 2 else
+            "x0, y0, z0, inv_cell, ncx, ncy, ncz")             # the cell grid
+    load_x = expand("@a = @[a]", dim)
+    out_a = ", ".join(f"out_a{ax}" for ax, _ in components(dim))
+    PLOAD = particle_load(dim)
     eos = asm.particle_code(plan.stage("particle", "all"), "final")
     # the passes the prepass runs before (rates always; see Plan.needs_prepass)
     prepass_before = ("\n#: the passes the prepass runs before (the rates always)\nPREPASS_BEFORE = "
@@ -163,6 +254,8 @@ from numba import njit, prange
 FLUID = 0
 WALL = 1
 GHOST = 2
+#: the dimension of the case
+DIM = {dim}
 PARAMS = {tuple(param_names)!r}
 AUX = {tuple(aux)!r}
 {aux_const}
@@ -182,14 +275,13 @@ def equation_of_state(rho, p, c, prm):
     parts.append(f'''
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
-def count_neighbours(x, y, kind, skip, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2,
+def count_neighbours({X}, kind, skip, cell_start, {grid}, prm, reach2,
                      count):
     """Neighbours of every particle within sqrt(reach2) (the cell side), from the cells;
     with ``skip``, none of a non-fluid particle's non-fluid neighbours."""
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
-        xa = x[a]
-        ya = y[a]
+{_block(load_x, 8)}
         fluid_a = (not skip) or kind[a] == FLUID
         n_a = 0
 {_block(cell_walk(asm, "n_a += 1", "n_a += ok", count=True), 8)}
@@ -197,15 +289,14 @@ def count_neighbours(x, y, kind, skip, cell_start, x0, y0, inv_cell, ncx, ncy, p
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
-def fill_neighbours(x, y, kind, skip, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2,
+def fill_neighbours({X}, kind, skip, cell_start, {grid}, prm, reach2,
                     nb_start, nb_idx):
     """The neighbour list: b of particle a in nb_idx[nb_start[a]:nb_start[a + 1]], in the
     order of the cell walk (cells by row, particles by cell); with ``skip``, no pair of two
     non-fluid particles."""
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
-        xa = x[a]
-        ya = y[a]
+{_block(load_x, 8)}
         fluid_a = (not skip) or kind[a] == FLUID
         k = nb_start[a]
         k_end = nb_start[a + 1]
@@ -218,7 +309,7 @@ def fill_neighbours(x, y, kind, skip, cell_start, x0, y0, inv_cell, ncx, ncy, pr
     if plan.has_stage("prepass"):
         loops = "".join(f'''
     for a in prange(x.shape[0]):
-{_block(_PARTICLE_LOAD, 8)}
+{_block(PLOAD, 8)}
 {_block(body, 8)}''' for body in asm.prepass_loops())
         parts.append(f'''
 
@@ -231,25 +322,22 @@ def prepass({_ARGS}):
     parts.append(f'''
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
-def rates({_ARGS}, out_ax, out_ay, out_drho, out_sigma):
+def rates({_ARGS}, {out_a}, out_drho, out_sigma):
     """dv/dt, drho/dt and sigma of T(3.89) for every particle (gather over neighbours);
     an empty out_sigma: no sigma (an evaluation whose time step is not taken from it)."""
 {_block(bind, 4)}
     want_sigma = out_sigma.shape[0] > 0
     for a in prange(x.shape[0]):
-{_block(_PARTICLE_LOAD, 8)}
-        acc_x = 0.0
-        acc_y = 0.0
+{_block(PLOAD, 8)}
+{_block(expand("acc_@ = 0.0", dim), 8)}
         drho_a = 0.0
         sigma_a = 0.0
         if kind[a] == FLUID:
 {_block(asm.gather(fluid_rates, sigma=sel.adjust_time_step, cache="read"), 12)}
-            acc_x += gx
-            acc_y += gy
+{_block(expand("acc_@ += g@", dim), 12)}
         else:
 {_block(asm.wall_gather("rates"), 12)}
-        out_ax[a] = acc_x
-        out_ay[a] = acc_y
+{_block(expand("out_a@[a] = acc_@", dim), 8)}
         out_drho[a] = drho_a
         if want_sigma:
             out_sigma[a] = sigma_a
@@ -260,7 +348,7 @@ def density_rate({_ARGS}, out_drho):
     """drho/dt alone (the last stage of Monaghan's 2007 scheme, T(3.96))."""
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
-{_block(_PARTICLE_LOAD, 8)}
+{_block(PLOAD, 8)}
         drho_a = 0.0
         if kind[a] == FLUID:
 {_block(asm.gather(plan.stage("density", "fluid"), cache=plan.cache_mode("density")), 12)}
@@ -280,7 +368,7 @@ def step_pass({_ARGS}):
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
         if kind[a] != FLUID:
-{_block(_PARTICLE_LOAD, 12)}
+{_block(PLOAD, 12)}
 {_block(asm.gather(step), 12)}
 ''')
         else:
@@ -294,7 +382,7 @@ def step_pass({_ARGS}):
     """Once per step, after the re-sort: per-step state of fluid and wall particles."""
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
-{_block(_PARTICLE_LOAD, 8)}
+{_block(PLOAD, 8)}
         if kind[a] == FLUID:
 {_block(asm.gather(fluid_step), 12)}
         else:
@@ -310,13 +398,13 @@ def density_filter({_ARGS}, out_rho):
     """{owner.doc}"""
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
-{_block(_PARTICLE_LOAD, 8)}
+{_block(PLOAD, 8)}
         rho_new = rhoa
         if kind[a] == FLUID:
 {_block(asm.gather(filt), 12)}
         out_rho[a] = rho_new
 ''')
-    for stage, name, outs in (("rates", "rates_half", "out_ax, out_ay, out_drho, out_sigma"),
+    for stage, name, outs in (("rates", "rates_half", f"{out_a}, out_drho, out_sigma"),
                               ("density", "density_half", "out_drho")):
         body = asm.half_loop(stage, sigma=stage == "rates" and sel.adjust_time_step)
         if body is None:
@@ -324,9 +412,9 @@ def density_filter({_ARGS}, out_rho):
         zero = "\n".join(f"{o}[a] = 0.0" for o in outs.split(", ") if o != "out_sigma")
         if stage == "rates":
             zero += "\nif want_sigma:\n    out_sigma[a] = 0.0"
-            start = "acc_x = 0.0\nacc_y = 0.0\ndrho_a = 0.0\nsigma_a = 0.0"
-            end = ("if kinda == FLUID:\n    acc_x += gx\n    acc_y += gy\n"
-                   "out_ax[a] += acc_x\nout_ay[a] += acc_y\nout_drho[a] += drho_a\n"
+            start = expand("acc_@ = 0.0", dim) + "\ndrho_a = 0.0\nsigma_a = 0.0"
+            end = ("if kinda == FLUID:\n" + _indent(expand("acc_@ += g@", dim)) + "\n"
+                   + expand("out_a@[a] += acc_@", dim) + "\nout_drho[a] += drho_a\n"
                    "if want_sigma and sigma_a > out_sigma[a]:\n    out_sigma[a] = sigma_a")
         else:
             start = "drho_a = 0.0"
@@ -346,7 +434,7 @@ def {name}({_ARGS}, half, {outs}):
 {_block(bind, 4)}{want}
     for a in prange(x.shape[0]):
 {_block(zero, 8)}
-{_block(_half_bands(start, body, end), 4)}
+{_block(_half_bands(dim, start, body, end), 4)}
 ''')
     if plan.prepass_half_terms() is not None:
         zero = "\n".join(f"hs[S_{n}, a] = 0.0" for n in plan.prepass_half_sums())
@@ -361,9 +449,9 @@ def prepass_half({_ARGS}, half, hs):
 {_block(bind, 4)}
     for a in prange(x.shape[0]):
 {_block(zero, 8)}
-{_block(_half_bands(asm.prepass_half_loop()), 4)}
+{_block(_half_bands(dim, asm.prepass_half_loop()), 4)}
     for a in prange(x.shape[0]):
-{_block(_PARTICLE_LOAD, 8)}
+{_block(PLOAD, 8)}
 {_block(asm.prepass_half_final(), 8)}
 ''')
     src = "".join(parts)

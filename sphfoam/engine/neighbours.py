@@ -43,6 +43,29 @@ def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
     return outside
 
 
+@njit(cache=True)   # no fastmath, as bin_particles
+def bin_particles_3d(x, y, z, x0, y0, z0, inv_cell, ncx, ncy, ncz, cell, lx, ly, lz):
+    """:func:`bin_particles` in three dimensions: cell (iz ncy + iy) ncx + ix."""
+    n = x.shape[0]
+    outside = 0
+    for a in range(n):
+        if lx > 0.0:
+            x[a] = x0 + (x[a] - x0) % lx
+        if ly > 0.0:
+            y[a] = y0 + (y[a] - y0) % ly
+        if lz > 0.0:
+            z[a] = z0 + (z[a] - z0) % lz
+        fx = (x[a] - x0) * inv_cell
+        fy = (y[a] - y0) * inv_cell
+        fz = (z[a] - z0) * inv_cell
+        if fx >= 0.0 and fx < ncx and fy >= 0.0 and fy < ncy and fz >= 0.0 and fz < ncz:
+            cell[a] = (int(fz) * ncy + int(fy)) * ncx + int(fx)
+        else:
+            cell[a] = -1
+            outside += 1
+    return outside
+
+
 #: the particle ranges the whole-state reductions split into (a fixed number, so that what
 #: each range holds does not depend on the thread count; max and min are exact anyway)
 REDUCTION_CHUNKS = 64
@@ -125,36 +148,58 @@ class CellList:
     """A fixed grid over the domain box; rebuilt (re-sorted) once per step.
 
     On a periodic axis the cells tile the period exactly (their side is the period divided
-    by a whole number >= 3, and no smaller than ``cell_size``).
+    by a whole number >= 3, and no smaller than ``cell_size``). ``lo`` and ``hi`` have two
+    or three components: the grid's dimension (cells numbered (iz ncy + iy) ncx + ix).
     """
 
-    def __init__(self, lo, hi, cell_size, periodic_x=False, periodic_y=False):
+    def __init__(self, lo, hi, cell_size, periodic_x=False, periodic_y=False,
+                 periodic_z=False):
+        self.dim = 3 if len(lo) > 2 and len(hi) > 2 else 2
         self.x0, self.y0 = float(lo[0]), float(lo[1])
+        self.z0 = float(lo[2]) if self.dim == 3 else 0.0
         self.lx = float(hi[0] - lo[0]) if periodic_x else 0.0
         self.ly = float(hi[1] - lo[1]) if periodic_y else 0.0
-        period = self.lx or self.ly
-        if period:
+        self.lz = float(hi[2] - lo[2]) if periodic_z and self.dim == 3 else 0.0
+        periods = [p for p in (self.lx, self.ly, self.lz) if p]
+        if periods:
+            period = periods[0]
             n = int(np.floor(period / cell_size))
             if n < 3:
                 raise ValueError(f"periodic length {period:g} must be at least 3 kernel supports "
                                  f"({3 * cell_size:g})")
             cell_size = period / n
-            if self.lx and self.ly and abs(self.ly / cell_size - round(self.ly / cell_size)) > 1e-9:
-                raise ValueError("with both axes periodic, the lengths must share a cell size")
+            if any(abs(p / cell_size - round(p / cell_size)) > 1e-9 for p in periods[1:]):
+                raise ValueError("with several axes periodic, the lengths must share a cell "
+                                 "size")
         self.cell_size = float(cell_size)
         self.ncx = max(1, int(np.ceil((hi[0] - lo[0]) / cell_size - 1e-9)))
         self.ncy = max(1, int(np.ceil((hi[1] - lo[1]) / cell_size - 1e-9)))
-        if self.ncx * self.ncy > 200_000_000:
-            raise ValueError("domain box too large for the cell grid "
-                             f"({self.ncx} x {self.ncy} cells); give a smaller domain")
-        self.ncells = self.ncx * self.ncy
+        self.ncz = max(1, int(np.ceil((hi[2] - lo[2]) / cell_size - 1e-9))) \
+            if self.dim == 3 else 1
+        if self.ncx * self.ncy * self.ncz > 200_000_000:
+            shape = " x ".join(str(k) for k in (self.ncx, self.ncy, self.ncz)[:self.dim])
+            raise ValueError(f"domain box too large for the cell grid ({shape} cells); give "
+                             "a smaller domain")
+        self.ncells = self.ncx * self.ncy * self.ncz
         self.cell_start = np.zeros(self.ncells + 1, dtype=np.int64)
 
-    def bin(self, x, y):
+    def bin(self, x, y, z=None):
         cell = np.empty(x.shape[0], dtype=np.int64)
-        outside = bin_particles(x, y, self.x0, self.y0, 1.0 / self.cell_size,
-                                self.ncx, self.ncy, cell, self.lx, self.ly)
+        if self.dim == 3:
+            outside = bin_particles_3d(x, y, z, self.x0, self.y0, self.z0,
+                                       1.0 / self.cell_size, self.ncx, self.ncy, self.ncz,
+                                       cell, self.lx, self.ly, self.lz)
+        else:
+            outside = bin_particles(x, y, self.x0, self.y0, 1.0 / self.cell_size,
+                                    self.ncx, self.ncy, cell, self.lx, self.ly)
         return cell, outside
+
+    def grid(self) -> tuple:
+        """The grid arguments of the generated neighbour search: origin, 1/side, counts."""
+        if self.dim == 3:
+            return (self.x0, self.y0, self.z0, 1.0 / self.cell_size, self.ncx, self.ncy,
+                    self.ncz)
+        return (self.x0, self.y0, 1.0 / self.cell_size, self.ncx, self.ncy)
 
     def sort(self, cell):
         """Return the permutation that sorts particles by cell; fills ``cell_start``."""

@@ -25,8 +25,13 @@ from sphfoam.engine.plan import Selection
 #: every sum's order, and so the results, the same whatever the thread count
 HALF_BANDS = 64
 
-#: the fixed scalar slots every pipeline reads from ``prm`` before the models' own
+#: the fixed scalar slots every pipeline reads from ``prm`` before the models' own (2-D)
 CORE_PARAMS = ("h", "inv_h", "support2", "eta2", "gx", "gy")
+
+
+def core_param_names(dim: int = 2) -> tuple[str, ...]:
+    """The fixed scalar slots of a pipeline in ``dim`` dimensions (gravity per component)."""
+    return CORE_PARAMS + (("gz",) if dim == 3 else ())
 
 
 @dataclass
@@ -74,15 +79,16 @@ class Pipeline:
     def density_rate(self):
         return self.module.density_rate
 
-    def neighbour_list(self, x, y, kind, cells, reach: float, start=None, idx=None):
+    def neighbour_list(self, x, y, kind, cells, reach: float, start=None, idx=None, z=None):
         """(nb_start, nb_idx): the neighbours of every particle within ``reach`` (at most
         the cell side), found by one walk of the cells; ``start``/``idx`` are reused when
-        large enough. Where ``fluid_pairs_only``, no pair of two non-fluid particles."""
+        large enough. Where ``fluid_pairs_only``, no pair of two non-fluid particles. ``z``:
+        the third coordinate of a three-dimensional case."""
         n = x.shape[0]
         count = np.empty(n, dtype=np.int64)
-        args = (x, y, kind, bool(self.fluid_pairs_only), cells.cell_start, cells.x0,
-                cells.y0, 1.0 / cells.cell_size, cells.ncx, cells.ncy, self.prm,
-                reach * reach)
+        coords = (x, y) if z is None else (x, y, z)
+        args = (*coords, kind, bool(self.fluid_pairs_only), cells.cell_start, *cells.grid(),
+                self.prm, reach * reach)
         self.module.count_neighbours(*args, count)
         if start is None or start.shape[0] != n + 1:
             start = np.empty(n + 1, dtype=np.int64)

@@ -37,9 +37,20 @@ class Selection:
     adjust_time_step: bool = True
     periodic_x: bool = False
     periodic_y: bool = False
+    periodic_z: bool = False
+    #: the dimension of the case: 2 (x, y) or 3 (x, y, z)
+    dim: int = 2
     #: ``sphSchemes`` ``precision``: "double", or "single" (float32 velocities, density,
     #: pressure, aux, coefficients and pair arithmetic; positions in double)
     precision: str = "double"
+
+    def periodic(self, axis: str) -> bool:
+        """Whether ``axis`` ("x", "y", "z") is periodic."""
+        return bool(getattr(self, f"periodic_{axis}"))
+
+    @property
+    def any_periodic(self) -> bool:
+        return self.periodic_x or self.periodic_y or self.periodic_z
 
     @property
     def dtype(self):
@@ -55,8 +66,9 @@ class Selection:
 
     def describe(self) -> str:
         txt = ", ".join(f"{m.family}={m.name}" for m in self.models() if m.name != "none")
-        per = "".join(a for a, on in (("x", self.periodic_x), ("y", self.periodic_y)) if on)
+        per = "".join(a for a in "xyz" if self.periodic(a))
         txt += f", periodic={per}" if per else ""
+        txt += ", 3-D" if self.dim == 3 else ""
         return txt + (", precision=single" if self.precision == "single" else "")
 
     def plan(self) -> "Plan":
@@ -256,8 +268,9 @@ class Plan:
         per-particle ``sums`` and the ``reaction`` that adds to b's; the kernel's pair
         quantities with their parity; no periodic axis; and every loop that reads what the
         prepass makes, or its pair cache (stored for each pair once, at a's entry, where the
-        half-list loops read it), is a half-list loop itself."""
-        if self.sel.periodic_x or self.sel.periodic_y:
+        half-list loops read it), is a half-list loop itself; two dimensions (the bands
+        are rows of cells)."""
+        if self.sel.any_periodic or self.sel.dim != 2:
             return None
         groups = self._prepass_groups()
         if len(groups) != 1:
@@ -292,8 +305,9 @@ class Plan:
         """(fluid terms, wet-wall terms) of ``stage`` when each of its pairs can be evaluated
         once for both particles (every term with pair code declares its ``reaction``, none
         has ``final`` code, every definer of a pair quantity its ``parity``; no periodic
-        axis), else None: then the stage is only the gather over full lists."""
-        if self.sel.periodic_x or self.sel.periodic_y:
+        axis; two dimensions: the bands of the half-list loops are rows of cells), else
+        None: then the stage is only the gather over full lists."""
+        if self.sel.any_periodic or self.sel.dim != 2:
             return None
         fluid = self.needed(self.stage(stage, "fluid"))
         wet = []
@@ -323,7 +337,7 @@ class Plan:
         where y is not periodic) and the caller subtracts it: without the test b != a per
         candidate the compiler vectorises the count (3.4 against 12.6 ms at 89 k
         particles, one thread, issue 12)."""
-        return not self.sel.periodic_x and not self.sel.periodic_y
+        return not self.sel.any_periodic
 
     # --- the checks of every loop, before any code is written ------------------------------
     def _check_loops(self) -> None:

@@ -1,0 +1,126 @@
+"""The generated pipeline in three dimensions (contract v2: the dimension is a parameter of
+the plan and the emitter): the 3 x 3 x 3 cell walk lists every pair, and the matched dam
+break's models conserve momentum and keep a uniform periodic lattice at rest."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from sphfoam.assemble import selection
+from sphfoam.case.case import Case
+from sphfoam.engine.build import build_pipeline, core_parameters
+from sphfoam.engine.neighbours import CellList
+from sphfoam.engine.state import FLUID
+
+MATCHED = Path(__file__).resolve().parent.parent / "benchmarks" / "cases" / "damBreakMatched"
+
+
+DX = Case(MATCHED).context.dx
+
+
+def _pipeline(periodic: bool, lo, hi):
+    case = Case(MATCHED)
+    sel = dataclasses.replace(selection(case), dim=3, periodic_x=periodic,
+                              periodic_y=periodic, periodic_z=periodic)
+    ctx = case.context
+    return build_pipeline(sel, ctx, core_parameters(sel, ctx, lo, hi), domain_lo=lo,
+                          domain_hi=hi), ctx
+
+
+def _list(pipe, x, y, z, kind, lo, hi, periodic):
+    cells = CellList(lo, hi, pipe.support_radius * 1.05, periodic, periodic, periodic)
+    cell, outside = cells.bin(x, y, z)
+    assert outside == 0
+    order = cells.sort(cell)
+    x, y, z, kind = x[order], y[order], z[order], kind[order]
+    start, idx = pipe.neighbour_list(x, y, kind, cells, cells.cell_size, z=z)
+    return (x, y, z, kind), start, idx, cells
+
+
+def test_the_3d_cell_walk_lists_every_pair_within_reach():
+    rng = np.random.default_rng(3)
+    lo, hi = (0.0, 0.0, 0.0), (25 * DX, 15 * DX, 20 * DX)
+    pipe, _ = _pipeline(False, lo, hi)
+    n = 600
+    x, y, z = (rng.uniform(a, b, n) for a, b in zip(lo, hi))
+    (x, y, z, kind), start, idx, cells = _list(pipe, x, y, z, np.zeros(n, dtype=np.int64),
+                                               lo, hi, False)
+    pts = np.column_stack([x, y, z])
+    want = cKDTree(pts).query_pairs(cells.cell_size * (1 - 1e-12))
+    got = {(min(a, int(b)), max(a, int(b))) for a in range(n)
+           for b in idx[start[a]:start[a + 1]]}
+    assert want <= got and all(np.linalg.norm(pts[a] - pts[b]) <= cells.cell_size * (1 + 1e-9)
+                               for a, b in got)
+
+
+def _rates(pipe, coords, kind, start, idx, rho, u=None):
+    n = kind.shape[0]
+    f = lambda: np.zeros(n)  # noqa: E731
+    vel = u if u is not None else (f(), f(), f())
+    m = np.full(n, 1000.0 * DX ** 3)
+    p, c = f(), f()
+    pipe.equation_of_state(rho, p, c, pipe.prm)
+    aux = np.zeros((pipe.n_aux, n))
+    fld = np.zeros((0, n))
+    out = [f(), f(), f(), f(), f()]
+    pipe.rates(*coords, *vel, rho, p, c, m, kind, start, idx, pipe.prm, aux, fld, *out)
+    return out, m
+
+
+def test_a_uniform_periodic_3d_lattice_stays_at_rest():
+    """Every particle of a cubic lattice, periodic in x, y and z, at the reference density,
+    has dv/dt = g and drho/dt = 0 (the pressure and viscous sums cancel by symmetry)."""
+    dx = DX
+    k = 12
+    lo, hi = (0.0, 0.0, 0.0), (k * dx, k * dx, k * dx)
+    pipe, ctx = _pipeline(True, lo, hi)
+    g = np.arange(k) * dx + dx / 2
+    x, y, z = (a.ravel().copy() for a in np.meshgrid(g, g, g, indexing="ij"))
+    n = x.size
+    coords_kind, start, idx, _ = _list(pipe, x, y, z, np.full(n, FLUID, dtype=np.int64),
+                                       lo, hi, True)
+    (x, y, z, kind) = coords_kind
+    rho = np.full(n, 1000.0) * 1.001          # a uniform pressure
+    (ax, ay, az, drho, _), _ = _rates(pipe, (x, y, z), kind, start, idx, rho)
+    assert np.abs(ax - ctx.g[0]).max() < 1e-9
+    assert np.abs(ay - ctx.g[1]).max() < 1e-9
+    assert np.abs(az).max() < 1e-9
+    assert np.abs(drho).max() < 1e-9
+    assert (np.diff(start) >= 80).all()        # a full sphere of neighbours, through the periods
+
+
+def test_momentum_is_conserved_by_the_3d_pair_forces():
+    """A disordered, moving, periodic block: the pressure and viscous forces are equal and
+    opposite per pair, so sum m dv/dt = sum m g to round-off."""
+    rng = np.random.default_rng(7)
+    dx = DX
+    k = 10
+    lo, hi = (0.0, 0.0, 0.0), (k * dx, k * dx, k * dx)
+    pipe, ctx = _pipeline(True, lo, hi)
+    g = np.arange(k) * dx + dx / 2
+    x, y, z = (a.ravel() + rng.uniform(-0.2, 0.2, k ** 3) * dx
+               for a in np.meshgrid(g, g, g, indexing="ij"))
+    n = x.size
+    (x, y, z, kind), start, idx, _ = _list(pipe, x % hi[0], y % hi[1], z % hi[2],
+                                           np.zeros(n, dtype=np.int64), lo, hi, True)
+    rho = 1000.0 * (1.0 + 0.01 * rng.uniform(-1, 1, n))
+    vel = tuple(rng.normal(0.0, 0.3, n) for _ in range(3))
+    (ax, ay, az, drho, _), m = _rates(pipe, (x, y, z), kind, start, idx, rho, vel)
+    scale = np.abs(m * ax).sum() + np.abs(m * az).sum()
+    assert abs((m * (ax - ctx.g[0])).sum()) < 1e-12 * scale
+    assert abs((m * (ay - ctx.g[1])).sum()) < 1e-12 * scale
+    assert abs((m * az).sum()) < 1e-12 * scale
+    assert np.abs(ax).max() > 1.0             # the forces are not trivially zero
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_half_lists_are_two_dimensional(dim):
+    """The half-list loops' bands are rows of cells: a 3-D pipeline gathers over full lists."""
+    case = Case(MATCHED)
+    sel = dataclasses.replace(selection(case), dim=dim)
+    assert (sel.plan().half_terms("rates") is None) == (dim == 3)
