@@ -154,3 +154,63 @@ def test_a_rounded_dx_fills_the_tank_to_the_far_wall(tutorial, dx, boundary):
     assert cols[0] - (-150.0) == pytest.approx(0.5 * dx, rel=1e-3)
     assert 100.0 - cols[-1] == pytest.approx(0.5 * dx, rel=1e-3)
     np.testing.assert_allclose(np.diff(cols), dx, rtol=1e-4)   # cols rounded to 1e-5 m
+
+
+def test_exact_wave_starts_quiet(tutorial):
+    """Issue 35, a quiet start: the crest of the exact (Euler) solitary wave set up at t = 0
+    does not breathe. The wall tutorial cut to a 100 m tank at d/dx = 8, A/d = 0.3, the
+    hydrostatic mirrored bed; the crest (crestTracker, surface fraction, every 0.01 s) over
+    the first 1.5 s. Breathing: max - min of eta_c(t) about its least-squares line, in % of
+    A (benchmarks/breathing.py). Measured 0.35 %; with the set-up's old hole at the bed
+    under every column where round((d + eta)/dx) rounds up (before the bottom particle kept
+    half its own spacing from the bed) 7.6 %, the crest falling to 2.76 m at the column's
+    acoustic period 4 (d + A)/c0 = 0.46 s. The bar is the issue's goal, 0.5 % of A."""
+    A, dx = 3.0, 1.25
+    case = tutorial("solitaryWallRunup", {
+        "system/particleDict:dx": dx,
+        "system/particleDict:fluid.water.min": [-50.0, 0.0],
+        "system/particleDict:fluid.water.max": [50.0, 10.0],
+        "system/particleDict:walls.tank.min": [-50.0, 0.0],
+        "system/particleDict:walls.tank.max": [50.0, 30.0],
+        "constant/waveProperties:waves.incident.theory": "euler",
+        "constant/sphProperties:boundary.pressure": "hydrostatic",
+        "system/controlDict:threads": 1,
+        "system/controlDict:endTime": 1.5,
+        "system/controlDict:writeInterval": 1.5,
+        "system/controlDict:functions": {"crest": {
+            "type": "crestTracker", "still": 10.0, "surface": "fraction",
+            "writeControl": "runTime", "writeInterval": 0.01}}})
+    run_case(case, progress=False, echo=None)
+    rows = np.loadtxt(case / "postProcessing" / "crest" / "0" / "crest.dat", ndmin=2)
+    t, eta = rows[:, 0], rows[:, 2]
+    assert t[-1] > 1.49 and t.size > 140
+    b, a = np.polyfit(t, eta, 1)
+    r = eta - (a + b * t)
+    breathing = 100.0 * (r.max() - r.min()) / A
+    assert breathing < 0.5, (breathing, eta[::10])
+    assert eta.min() > 0.99 * A, eta[::10]
+
+
+def test_wall_particles_carry_the_waves_pressure(tutorial):
+    """Wall particles under an initial wave get the wave's own (non-hydrostatic) pressure,
+    continued hydrostatically from the nearest fluid particle: under the crest of the exact
+    wave at A/d = 0.3 the bed's pressure is 5.2 kPa below rho0 g (d + A), which the
+    hydrostatic rule of the still tank gave them. Beside still water nothing changes."""
+    from sphfoam.setup.waves import fields
+    d, dx = 10.0, 1.25
+    case = tutorial("solitaryWallRunup", {
+        "system/particleDict:dx": dx,
+        "constant/waveProperties:waves.incident.theory": "euler",
+        "constant/sphProperties:boundary": {"type": "stationaryGhosts"}})
+    c = Case(case)
+    st = setup_case(c, log=lambda m: None)
+    eos = c.models.sph["equationOfState"]
+    p = eos.pressure(st.rho, c.context)
+    w = (st.kind == 1) & (np.abs(st.x) < 2.0) & (st.y < 0)          # the bed under the crest
+    assert w.sum() >= 6
+    rho0, g = c.context.rho0, 9.81
+    _, _, pbed = fields(st.x[w], np.zeros(w.sum()), 0.0, d, list(c.waves.values()), g, rho0)
+    np.testing.assert_allclose(p[w], pbed - rho0 * g * st.y[w], rtol=2e-3)
+    assert (p[w] < rho0 * g * (d + 3.0 - st.y[w]) - 4000.0).all()
+    still = (st.kind == 1) & (st.x > 90.0) & (st.y < 0)                  # far from the wave
+    np.testing.assert_allclose(p[still], rho0 * g * (d - st.y[still]), rtol=1e-3)
