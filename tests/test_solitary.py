@@ -17,6 +17,7 @@ from sphfoam.case.case import Case
 from sphfoam.case.times import list_times
 from sphfoam.io.fields import read_state
 from sphfoam.runner import run_case, setup_case
+from sphfoam.setup.waves import continuity_velocity, is_kinematic
 
 
 def test_solitary_wave_from_theory_keeps_height_and_celerity_over_ten_depths(tutorial):
@@ -40,9 +41,10 @@ def test_solitary_wave_from_theory_keeps_height_and_celerity_over_ten_depths(tut
     assert st.y[crest].max() + 0.5 * (d + A) / round((d + A) / 1.0) == pytest.approx(d + A,
                                                                                    abs=0.05)
     k = np.flatnonzero(crest)
-    np.testing.assert_allclose(st.u[k], kdv2.u(st.x[k], st.y[k], x0=-60.0), rtol=1e-9)
-    np.testing.assert_allclose(st.v[k], kdv2.w(st.x[k], st.y[k], x0=-60.0), rtol=1e-9,
-                               atol=1e-12)
+    # KdV2's u scaled to the flux c eta, w from continuity (waveProperties velocity continuity)
+    u, w = continuity_velocity(kdv2, st.x[k], st.y[k], -60.0)
+    np.testing.assert_allclose(st.u[k], u, rtol=1e-9)
+    np.testing.assert_allclose(st.v[k], w, rtol=1e-9, atol=1e-12)
     run_case(case, progress=False, echo=None)
     rows = np.loadtxt(case / "postProcessing" / "crest" / "0" / "crest.dat", ndmin=2)
     fit = np.loadtxt(case / "postProcessing" / "crest" / "0" / "celerity.dat", ndmin=2)
@@ -106,7 +108,8 @@ def test_initial_waves_set_up_beside_wall_particles(tutorial):
     assert (st.kind != 0).sum() > 0
     f = np.flatnonzero((st.kind == 0) & (np.abs(st.x) < 0.51))   # the crest's columns
     assert f.size > 0
-    np.testing.assert_allclose(st.u[f], kdv2.u(st.x[f], st.y[f], x0=0.0), rtol=1e-9)
+    np.testing.assert_allclose(st.u[f], continuity_velocity(kdv2, st.x[f], st.y[f], 0.0)[0],
+                               rtol=1e-9)
 
 
 @pytest.mark.parametrize("boundary", ["mirrorGhosts", "stationaryGhosts"])
@@ -214,3 +217,44 @@ def test_wall_particles_carry_the_waves_pressure(tutorial):
     assert (p[w] < rho0 * g * (d + 3.0 - st.y[w]) - 4000.0).all()
     still = (st.kind == 1) & (st.x > 90.0) & (st.y < 0)                  # far from the wave
     np.testing.assert_allclose(p[still], rho0 * g * (d - st.y[still]), rtol=1e-3)
+
+
+@pytest.mark.parametrize("theory", ["kdv2", "laitone", "kdv1"])
+def test_approximate_theories_start_solenoidal(tutorial, theory):
+    """waveProperties ``velocity continuity`` (the default): a theory whose own (u, w) is not
+    divergence-free or whose flux is not c eta gets u scaled to the flux c eta per column and
+    w from continuity; div u = 0 and the kinematic surface condition w = (u - c) eta_x hold
+    (KdV2's own: |div u| up to 12 % of |du/dx|, the surface condition off by 0.12 m/s).
+    ``velocity theory`` keeps the theory's own fields (P's set-up)."""
+    A, d = 3.0, 10.0
+    sw = registry.build("waveTheory", {"type": theory}).solitary(A, d)
+    assert not is_kinematic(sw)
+    x = np.linspace(-40.0, 40.0, 81)
+    eta = sw.eta(x)
+    e = 1e-4
+    for frac in (0.2, 0.6, 1.0):
+        z = frac * (d + eta)
+        dudx = (continuity_velocity(sw, x + e, z, 0.0)[0]
+                - continuity_velocity(sw, x - e, z, 0.0)[0]) / (2 * e)
+        dwdz = (continuity_velocity(sw, x, z + e, 0.0)[1]
+                - continuity_velocity(sw, x, z - e, 0.0)[1]) / (2 * e)
+        assert np.abs(dudx + dwdz).max() < 1e-5 * np.abs(dudx).max()
+    u, w = continuity_velocity(sw, x, d + eta, 0.0)
+    slope = (sw.eta(x + e) - sw.eta(x - e)) / (2 * e)
+    np.testing.assert_allclose(w, (u - sw.c) * slope, atol=1e-8)
+    assert np.abs(continuity_velocity(sw, x, np.zeros_like(x), 0.0)[1]).max() == 0.0
+    for exact in ("euler", "mcCowan", "boussinesq"):
+        assert is_kinematic(registry.build("waveTheory", {"type": exact}).solitary(A, d))
+    # the set-up: continuity by default, the theory's own with velocity theory
+    for mode in ("continuity", "theory"):
+        case = tutorial("solitaryWallRunup", {
+            "system/particleDict:dx": 1.25,
+            "constant/waveProperties:waves.incident.theory": theory,
+            **({"constant/waveProperties:waves.incident.velocity": mode}
+               if mode == "theory" else {})})
+        st = setup_case(Case(case), log=lambda m: None)
+        f = np.flatnonzero((st.kind == 0) & (np.abs(st.x) < 20.0))
+        uu, ww = (continuity_velocity(sw, st.x[f], st.y[f], 0.0) if mode == "continuity" else
+                  (sw.u(st.x[f], st.y[f]), sw.w(st.x[f], st.y[f])))
+        np.testing.assert_allclose(st.u[f], uu, rtol=1e-9)
+        np.testing.assert_allclose(st.v[f], ww, rtol=1e-9, atol=1e-12)
