@@ -179,12 +179,18 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
             help="numba threads, or auto (overrides controlDict threads)"),
         end_time: Optional[float] = typer.Option(None, "--end-time",
                                                  help="stop here instead of endTime"),
-        no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar")):
+        no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
+        backend: Optional[str] = typer.Option(None, "--backend", metavar="cpu|cuda",
+                                              help="overrides sphSchemes backend")):
     """Run CASE from its start time (setting up particles first if 0/ has none)."""
     from sphfoam.engine.health import BlowUp
     from sphfoam.timeloop import run_case
 
     c = _case(case)
+    if backend is not None:
+        if backend not in ("cpu", "cuda"):
+            _fail("run", f"--backend {backend}: valid are cpu, cuda")
+        object.__setattr__(c.schemes, "backend", backend)
     try:
         rep = run_case(c, progress=not no_progress and console.is_terminal, echo=_echo,
                        end_time=end_time, console=console, threads=threads)
