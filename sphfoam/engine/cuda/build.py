@@ -40,8 +40,6 @@ def refusals(sel: Selection, motions=None) -> list[str]:
         if hooks:
             out.append(f"{m.family} {m.name!r}: its run-time hooks ({', '.join(hooks)}) run "
                        "on host arrays")
-    if motions:
-        out.append("prescribed wall motion (constant/motionProperties): not on the device yet")
     return out
 
 

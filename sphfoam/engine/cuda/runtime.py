@@ -392,9 +392,23 @@ class CudaSimulation:
         """No advection model has a device form yet: positions move with the velocity."""
         self._pU = (self.d["u"], self.d["v"])
 
+    def _extra(self, k):
+        return self.d_extra[k] if k in self.d_extra else \
+            self.d_fld[list(self.module.FIELDS).index(k)]
+
     def move_walls(self, t: float):
-        if self.motions:           # (refused when the pipeline was built)
-            raise RuntimeError("wall motion has no device form")
+        """Every wall with a prescribed motion where it is at time ``t`` (a kernel over the
+        particles of each wall entry: r = r0 + d(t), v = d'(t))."""
+        if not self.motions or "patch" not in self.d_extra and \
+                "patch" not in self.module.FIELDS:
+            return
+        d = self.d
+        for which, mot in self.motions.items():
+            (ox, oy), (uu, vv) = mot.displacement(t), mot.velocity(t)
+            self._timed("walls", self._launch, self.D.prescribe_patch, self.n, d["x"], d["y"],
+                        d["u"], d["v"], self._extra("patch"), self._extra("x0"),
+                        self._extra("y0"), float(which), float(ox), float(oy), float(uu),
+                        float(vv))
 
     # --- the integrator's updates ---------------------------------------------------------
     def run_update(self, name: str, scalars: dict):
@@ -445,6 +459,7 @@ class CudaSimulation:
     # --- stepping -------------------------------------------------------------------------
     def step(self, dt_remaining: float = math.inf) -> float:
         """Re-sort, filter the density when due, then one step of the integrator."""
+        self.move_walls(self.time)
         self._timed("neighbours", self.neighbour_update)
         self.step_pass()
         self.filtered = bool(self.filter_schedule and
