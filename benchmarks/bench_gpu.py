@@ -69,7 +69,9 @@ def _device_bytes(sim) -> int:
 
 
 def bench_cuda(tmp: Path, n: int, steps: int) -> dict:
-    from numba import cuda
+    from sphfoam.engine.cuda import cuda_module
+
+    cuda = cuda_module()
 
     sim, dx, setup_s = _setup(tmp, n, "cuda")
     evals = getattr(sim.integrator, "force_evaluations_per_step", 1)
@@ -171,7 +173,9 @@ def main(argv=None):
     ap.add_argument("--no-cpu", action="store_true")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     a = ap.parse_args(argv)
-    from numba import cuda
+    from sphfoam.engine.cuda import cuda_module
+
+    cuda = cuda_module()
 
     try:
         dev = cuda.get_current_device().name

@@ -25,8 +25,8 @@ def _flags_take_no_value() -> None:
     they take none (typer 0.2x); show them as the bare flags they are."""
     from typer.core import TyperOption
 
-    show = TyperOption.display_type_rich
-    if getattr(show, "flags_fixed", False):
+    show = getattr(TyperOption, "display_type_rich", None)
+    if show is None or getattr(show, "flags_fixed", False):   # (another typer: nothing to fix)
         return
 
     def display_type_rich(self, ctx):

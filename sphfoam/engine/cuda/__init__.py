@@ -20,6 +20,12 @@ class BackendUnavailable(RuntimeError):
 def cuda_module():
     """``numba.cuda`` when it can run kernels (a device, or ``NUMBA_ENABLE_CUDASIM=1``);
     else :class:`BackendUnavailable` with what to do."""
+    import numpy as np
+
+    if not hasattr(np, "row_stack"):
+        # numpy 2.5 removed the alias; numba-cuda releases before the fix still register an
+        # overload for it when numba.cuda is imported (seen on an H200 machine)
+        np.row_stack = np.vstack
     try:
         from numba import cuda
     except ImportError as e:  # pragma: no cover - depends on the installation
