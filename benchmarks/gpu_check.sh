@@ -34,9 +34,9 @@ python3 -c "from sphfoam.engine.cuda import cuda_module; c = cuda_module(); impo
 
 # 2. CUDA against CPU on the device, a few hundred steps, small cases (about 40 s each)
 (
-  timeout 100 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300
-  timeout 60 python3 tests/cuda_compare.py solitaryWave --dx 0.1 --steps 200
-  timeout 60 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300 \
+  timeout 80 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300
+  timeout 50 python3 tests/cuda_compare.py solitaryWave --dx 0.1 --steps 200
+  timeout 50 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300 \
       --edits '{"system/sphSchemes:precision": "single"}'
 ) 2>&1 | tee "$OUT/compare.log"
 
@@ -45,7 +45,7 @@ for c in damBreakMatched solitaryWave; do
   (
     src=$ROOT/benchmarks/cases/$c; [ -d "$src" ] || src=$ROOT/tutorials/$c
     rm -rf "/tmp/run_$c"; cp -r "$src" "/tmp/run_$c"
-    timeout 90 python3 -m sphfoam run "/tmp/run_$c" --backend cuda --end-time 0.02 --no-progress
+    timeout 60 python3 -m sphfoam run "/tmp/run_$c" --backend cuda --end-time 0.02 --no-progress
     echo "exit $?"; ls "/tmp/run_$c"
   ) 2>&1 | tee "$OUT/run_$c.log"
 done
