@@ -35,6 +35,10 @@ def cuda_module():
         ok = cuda.is_available()
     except Exception as e:  # noqa: BLE001  (the driver's own error, reported in words)
         raise BackendUnavailable(f"backend cuda: no usable CUDA driver ({e})") from None
+    from numba import config
+
+    # small cases launch few blocks by design; the warning would print at every launch
+    config.CUDA_LOW_OCCUPANCY_WARNINGS = 0
     if not ok:
         raise BackendUnavailable("backend cuda: no CUDA device found (set "
                                  "NUMBA_ENABLE_CUDASIM=1 to run on numba's simulator)")
