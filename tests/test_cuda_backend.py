@@ -26,8 +26,15 @@ ROOT = Path(__file__).resolve().parent.parent
 #: relative to each field's largest magnitude, after the steps below
 RTOL = 1e-9
 
-#: (case, dx, steps): every tutorial selection the device supports, and the matched case
-CASES = [("damBreakMatched", 0.1, 5), ("damBreak", 0.02, 5), ("solitaryWave", 0.125, 3)]
+#: (case, dx, steps): the matched case (always, about 80 s on the simulator), and the
+#: tutorial selections the device supports that it does not cover (each about 90 s: with
+#: SPHFOAM_SLOW_TESTS=1): damBreak (quartic, symmetric, artificial viscosity, Monaghan
+#: 2007), solitaryWave (laminar, Shepard filter, the paddle's prescribed motion)
+_SLOW = pytest.mark.skipif(os.environ.get("SPHFOAM_SLOW_TESTS") != "1",
+                           reason="the CUDA simulator, 90 s: set SPHFOAM_SLOW_TESTS=1")
+CASES = [("damBreakMatched", 0.1, 5),
+         pytest.param("damBreak", 0.02, 5, marks=_SLOW),
+         pytest.param("solitaryWave", 0.125, 3, marks=_SLOW)]
 
 
 def _compare(case: str, dx, steps: int) -> dict:
