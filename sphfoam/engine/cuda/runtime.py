@@ -17,8 +17,12 @@ import numpy as np
 
 from sphfoam.engine.cuda import cuda_module
 from sphfoam.engine.neighbours import CellList
+from sphfoam.engine.schedule import Schedule
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.stepping import StepContext, components, field_components
+
+#: steps between the time loop's health checks (the state copied back for them)
+HEALTH_EVERY = 100
 
 _STATE_F8 = ("x", "y")
 _STATE_W = ("u", "v", "rho", "m")
@@ -128,6 +132,10 @@ class CudaSimulation:
         self._dstate = _DeviceState(self)
         self._stepping = _DeviceStepContext(self)
         self._dirty = False
+        #: the time loop's health checks and progress bar read the state on the host: every
+        #: HEALTH_EVERY steps here, not every step (a blow-up is then caught up to that many
+        #: steps late; the checks have no device form yet)
+        self.health_schedule = Schedule("timeStep", HEALTH_EVERY)
 
     # --- host <-> device ------------------------------------------------------------------
     def _to(self, a, dtype):
