@@ -25,11 +25,14 @@ def selection(case: Case) -> Selection:
                      precision=case.schemes.precision)
 
 
-def build_simulation(case: Case, state: ParticleState) -> Simulation:
+def build_simulation(case: Case, state: ParticleState, backend: str | None = None):
+    """The case's simulation on its backend (``sphSchemes`` ``backend``, or ``backend``)."""
     ctx = case.context
     sel = selection(case)
     lo, hi = default_domain(case.particles)
     check_wall_fields(case, state)
+    if (backend or getattr(case.schemes, "backend", "cpu")) == "cuda":
+        return _cuda_simulation(case, state, sel, lo, hi)
     pipe = build_pipeline(sel, ctx, domain_lo=lo, domain_hi=hi)
     c = case.control
     return Simulation(state, pipe, case.models.integrator,
@@ -69,3 +72,27 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
         raise CaseError.single(SPH_PROPERTIES, "boundary.type",
                                f"{problem}: they were set up for another boundary; run "
                                f"'sphfoam setup --force' again for {bnd.name}")
+
+
+def _cuda_simulation(case: Case, state: ParticleState, sel, lo, hi):
+    """The CUDA backend's simulation (``sphfoam.engine.cuda``); what it cannot run is
+    refused by name."""
+    from sphfoam.engine.cuda import BackendUnavailable, cuda_module
+    from sphfoam.engine.cuda.build import CudaPipeline, Unsupported
+
+    try:
+        cuda_module()
+        pipe = CudaPipeline(sel, case.context, lo, hi, motions=case.models.motions)
+    except (BackendUnavailable, Unsupported) as e:
+        raise CaseError.single("system/sphSchemes", "backend", str(e)) from None
+    from sphfoam.engine.cuda.runtime import CudaSimulation
+
+    c, ctx = case.control, case.context
+    return CudaSimulation(state, pipe, case.models.integrator,
+                          segments=segments_of(case.particles), motions=case.models.motions,
+                          domain_lo=lo, domain_hi=hi, beta=c.maxCo,
+                          force_condition=case.schemes.timeStepControl.forceCondition,
+                          adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
+                          max_delta_t=c.maxDeltaT,
+                          cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
+                          dt_limit=min(m.dt_limit(ctx) for m in sel.models()))

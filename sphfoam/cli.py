@@ -25,8 +25,8 @@ def _flags_take_no_value() -> None:
     they take none (typer 0.2x); show them as the bare flags they are."""
     from typer.core import TyperOption
 
-    show = TyperOption.display_type_rich
-    if getattr(show, "flags_fixed", False):
+    show = getattr(TyperOption, "display_type_rich", None)
+    if show is None or getattr(show, "flags_fixed", False):   # (another typer: nothing to fix)
         return
 
     def display_type_rich(self, ctx):
@@ -179,12 +179,18 @@ def run(case: Path = typer.Argument(Path("."), help="case directory"),
             help="numba threads, or auto (overrides controlDict threads)"),
         end_time: Optional[float] = typer.Option(None, "--end-time",
                                                  help="stop here instead of endTime"),
-        no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar")):
+        no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
+        backend: Optional[str] = typer.Option(None, "--backend", metavar="cpu|cuda",
+                                              help="overrides sphSchemes backend")):
     """Run CASE from its start time (setting up particles first if 0/ has none)."""
     from sphfoam.engine.health import BlowUp
     from sphfoam.timeloop import run_case
 
     c = _case(case)
+    if backend is not None:
+        if backend not in ("cpu", "cuda"):
+            _fail("run", f"--backend {backend}: valid are cpu, cuda")
+        object.__setattr__(c.schemes, "backend", backend)
     try:
         rep = run_case(c, progress=not no_progress and console.is_terminal, echo=_echo,
                        end_time=end_time, console=console, threads=threads)

@@ -82,7 +82,7 @@ def settle(case, state: ParticleState, log=print) -> tuple[ParticleState, int, f
     u_set, v_set = state.u[wall][order], state.v[wall][order]
     state.u[wall] = 0.0
     state.v[wall] = 0.0
-    sim = build_simulation(case, state)
+    sim = build_simulation(case, state, backend="cpu")   # settling runs on the host
     sim.motions = {}                 # paddles and moving walls stay where they were set up
     sim.time, sim.step_index = 0.0, 0
 

@@ -134,8 +134,10 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
     monitor.start(sim)
     written: list[Path] = []
     writes = write_schedule(c)
-    health = Schedule("everyStep")
-    progress_due = Schedule("everyStep")   # the bar itself redraws at most every 0.2 s
+    # a device backend says how often its state may come back for the checks (and the bar)
+    health = getattr(sim, "health_schedule", None) or Schedule("everyStep")
+    progress_due = getattr(sim, "health_schedule", None) or Schedule("everyStep")
+    # (the bar itself redraws at most every 0.2 s)
     eps = 1e-9 * max(c.writeInterval, 1e-300)
     bar = _Progress(progress, t0, t_end, state.n, console)
     pool = RunThreads(c.threads if threads is None else threads,

@@ -197,6 +197,9 @@ class SphSchemes(Strict):
         "working precision of velocities, density, pressure and the pair arithmetic: "
         "double, or single (float32; positions stay double, relative positions are formed "
         "in double and then rounded)"))
+    backend: Literal["cpu", "cuda"] = Field("cpu", description=(
+        "where the pipeline runs: cpu (numba's threads) or cuda (one GPU thread per "
+        "particle, numba-cuda: pip install 'sphfoam[gpu]')"))
 
 
 # --- constant/ -----------------------------------------------------------------------------

@@ -1,0 +1,489 @@
+"""The CUDA backend's runtime: :class:`CudaSimulation`, the ``Simulation``'s interface to the
+time loop over device arrays.
+
+The state, the integrator's kept arrays and history, the aux fields, the coefficients, the
+cell list and the neighbour list live on the device between writes; Python launches the
+kernels of a step and reads back scalars only (the time step, the list check, the list's
+length, the count of particles that left). ``state`` copies the arrays back on demand
+(writes, function objects).
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+
+import numpy as np
+
+from sphfoam.engine.cuda import cuda_module
+from sphfoam.engine.neighbours import CellList
+from sphfoam.engine.schedule import Schedule
+from sphfoam.engine.state import FLUID, ParticleState
+from sphfoam.engine.stepping import StepContext, components, field_components
+
+#: steps between the time loop's health checks (the state copied back for them)
+HEALTH_EVERY = 100
+
+_STATE_F8 = ("x", "y")
+_STATE_W = ("u", "v", "rho", "m")
+_STATE_I8 = ("kind", "id")
+_SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma")
+
+
+class _DeviceExtra(dict):
+    """The persistent extra fields on the device; a host array set is copied there."""
+
+    def __init__(self, cuda):
+        super().__init__()
+        self._cuda = cuda
+
+    def __setitem__(self, k, v):
+        if isinstance(v, np.ndarray):
+            v = self._cuda.to_device(np.ascontiguousarray(v, dtype=np.float64))
+        super().__setitem__(k, v)
+
+
+class _DeviceState:
+    """What an integrator's ``step`` reads of the state: ``n`` and ``extra`` (device
+    arrays; one element read is one scalar copied back)."""
+
+    def __init__(self, sim):
+        self._sim = sim
+
+    @property
+    def n(self) -> int:
+        return self._sim.n
+
+    @property
+    def extra(self):
+        return self._sim.d_extra
+
+
+class _DeviceStepContext(StepContext):
+    __slots__ = ()
+
+    @property
+    def state(self):
+        return self._sim._dstate
+
+
+class CudaSimulation:
+    """The particle state stepped by the CUDA kernels of a selection."""
+
+    def __init__(self, state: ParticleState, pipeline, integrator, *, domain_lo, domain_hi,
+                 beta: float, force_condition: bool, adjust_time_step: bool, delta_t: float,
+                 max_delta_t: float = math.inf, cell_size_factor: float = 1.05,
+                 dt_limit: float = math.inf, segments=(), motions=None):
+        from sphfoam.engine.cuda import device as D
+
+        self.cuda = cuda_module()
+        self.D = D
+        self.pipeline = pipeline
+        self.module = pipeline.module
+        sel = pipeline.selection
+        self.selection = sel
+        self.dtype = sel.dtype
+        self.integrator = integrator
+        self.h = pipeline.h
+        reach = pipeline.support_radius
+        self.beta = float(beta)
+        self.force_condition = bool(force_condition)
+        self.adjust_time_step = bool(adjust_time_step)
+        self.delta_t = float(delta_t)
+        self.max_delta_t = float(max_delta_t)
+        self.model_dt_limit = float(dt_limit)
+        if cell_size_factor < 1.0:
+            raise ValueError("cellSizeFactor must be >= 1")
+        self.cells = CellList(domain_lo, domain_hi, reach * cell_size_factor,
+                              sel.periodic_x, sel.periodic_y)
+        self.skin = self.cells.cell_size - reach
+        schedules = [m.schedule() for m in sel.models() if m.schedule() is not None]
+        self.filter_schedule = (schedules[0] if schedules and
+                                getattr(self.module, "HAS_FILTER", False) else None)
+        self.filtered = False
+        self.time = 0.0
+        self.step_index = 0
+        self.last_dt = float(delta_t)
+        self.removals = []
+        self.on_removal = None
+        self.segments = list(segments)
+        self.motions = dict(motions or {})
+        self.list_built = 0
+        self.list_reused = 0
+        #: bytes copied host -> device and device -> host (the benchmark's traffic)
+        self.bytes_h2d = 0
+        self.bytes_d2h = 0
+        #: seconds per stage when ``timers`` is set (synchronised: for benchmarks only)
+        self.timers = None
+        self._host = state
+        self._upload(state)
+        self.prm = pipeline.prm
+        self.d_prm = self.cuda.to_device(pipeline.prm)
+        self._nb = (None, None)
+        self._pc = None
+        self._ref = None
+        self._prepassed = None
+        self._evaluations = None
+        self._pU = None
+        self._kept: dict = {}
+        self._red = self.cuda.device_array(3, dtype=np.float64)
+        self._scan_scratch = None
+        self.updates = None
+        self._dstate = _DeviceState(self)
+        self._stepping = _DeviceStepContext(self)
+        self._dirty = False
+        #: the time loop's health checks and progress bar read the state on the host: every
+        #: HEALTH_EVERY steps here, not every step (a blow-up is then caught up to that many
+        #: steps late; the checks have no device form yet)
+        self.health_schedule = Schedule("timeStep", HEALTH_EVERY)
+
+    # --- host <-> device ------------------------------------------------------------------
+    def _to(self, a, dtype):
+        a = np.ascontiguousarray(a, dtype=dtype)
+        self.bytes_h2d += a.nbytes
+        return self.cuda.to_device(a)
+
+    def _upload(self, st: ParticleState):
+        self.n = st.n
+        self.d = {}
+        for k in _STATE_F8:
+            self.d[k] = self._to(getattr(st, k), np.float64)
+        for k in _STATE_W:
+            self.d[k] = self._to(getattr(st, k), self.dtype)
+        for k in _STATE_I8:
+            self.d[k] = self._to(getattr(st, k), np.int64)
+        for k in _SCRATCH:
+            self.d[k] = self.cuda.device_array(self.n, dtype=self.dtype)
+        self.d_extra = _DeviceExtra(self.cuda)
+        fields = self.module.FIELDS
+        for k, a in st.extra.items():
+            if k not in fields:
+                self.d_extra[k] = self._to(a, np.float64)
+        self.d_fld = self._to(np.stack([st.extra[k] for k in fields]) if fields
+                              else np.zeros((0, self.n)), np.float64)
+        self.d_aux = self.cuda.to_device(np.zeros((len(self.module.AUX), self.n),
+                                                  dtype=self.dtype))
+
+    def _get(self, a):
+        out = a.copy_to_host()
+        self.bytes_d2h += out.nbytes
+        return out
+
+    @property
+    def state(self) -> ParticleState:
+        """The state copied back from the device (for writes and function objects)."""
+        if self._dirty or self._host.n != self.n:
+            d = self.d
+            extra = {k: self._get(v) for k, v in self.d_extra.items()}
+            fld = self._get(self.d_fld)
+            for i, k in enumerate(self.module.FIELDS):
+                extra[k] = fld[i]
+            st = ParticleState(*(self._get(d[k]) for k in ("x", "y", "u", "v", "rho", "m",
+                                                           "kind", "id")), extra=extra)
+            if self.dtype != np.float64:
+                st.set_precision(self.dtype)
+            for k in _SCRATCH:
+                setattr(st, k, self._get(d[k]))
+            self._host = st
+            self._dirty = False
+        return self._host
+
+    def pressure(self) -> np.ndarray:
+        self.eos()
+        return self._get(self.d["p"])
+
+    def summary(self) -> str:
+        return ""
+
+    def invalidate_neighbours(self):
+        self._ref = None
+
+    def kinetic_energy(self) -> float:
+        st = self.state
+        f = st.kind == FLUID
+        return float(0.5 * np.sum(st.m[f] * (st.u[f] ** 2 + st.v[f] ** 2)))
+
+    @property
+    def filter_every(self) -> int:
+        return int(self.filter_schedule.interval) if self.filter_schedule else 0
+
+    # --- timing ---------------------------------------------------------------------------
+    def _timed(self, name, fn, *args):
+        if self.timers is None:
+            return fn(*args)
+        self.cuda.synchronize()
+        t0 = _time.perf_counter()
+        out = fn(*args)
+        self.cuda.synchronize()
+        self.timers[name] = self.timers.get(name, 0.0) + _time.perf_counter() - t0
+        return out
+
+    def _launch(self, kernel, n, *args):
+        kernel[self.D.blocks(n), self.D.THREADS](*args)
+
+    # --- the neighbour list -----------------------------------------------------------------
+    def _list_still_valid(self) -> bool:
+        ref = self._ref
+        if ref is None or ref[0].shape[0] != self.n:
+            return False
+        cl = self.cells
+        self._red.copy_to_device(np.zeros(3))
+        d = self.d
+        self._launch(self.D.displacement_reduce, self.n, d["x"], d["y"], ref[0], ref[1],
+                     d["u"], d["v"], cl.x0, cl.y0, cl.x0 + cl.ncx * cl.cell_size,
+                     cl.y0 + cl.ncy * cl.cell_size, cl.lx, cl.ly, self._red)
+        d2, v2, out = self._get(self._red)
+        if out:
+            return False
+        return math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt < 0.5 * self.skin
+
+    def neighbour_update(self):
+        """The list of this step: the previous one while it is valid, else bin, sort by
+        cell (deterministic), drop particles that left and list the neighbours."""
+        if self._list_still_valid():
+            self.list_reused += 1
+            return
+        cu, D, cl, d = self.cuda, self.D, self.cells, self.d
+        n = self.n
+        ncells = cl.ncx * cl.ncy
+        cell = cu.device_array(n, dtype=np.int64)
+        counts = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
+        self._launch(D.bin_particles, n, d["x"], d["y"], cl.x0, cl.y0, 1.0 / cl.cell_size,
+                     cl.ncx, cl.ncy, cl.lx, cl.ly, cell, counts)
+        start = cu.device_array(ncells + 2, dtype=np.int64)
+        self._scan_scratch = D.exclusive_scan(counts, start, self._scan_scratch)
+        fill = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
+        order = cu.device_array(n, dtype=np.int64)
+        self._launch(D.scatter, n, cell, start, fill, order)
+        self._launch(D.order_cells, ncells + 1, start, order)
+        kept = int(start[ncells])            # particles inside the box (one scalar)
+        self.bytes_d2h += 8
+        for k in list(d):
+            if k in _SCRATCH:
+                continue
+            out = cu.device_array_like(d[k])
+            self._launch(D.permute, n, d[k], order, out)
+            d[k] = out
+        for k in list(self.d_extra):
+            out = cu.device_array_like(self.d_extra[k])
+            self._launch(D.permute, n, self.d_extra[k], order, out)
+            dict.__setitem__(self.d_extra, k, out)
+        if self.d_fld.shape[0]:
+            out = cu.device_array_like(self.d_fld)
+            self._launch(D.permute_rows, n, self.d_fld, order, out)
+            self.d_fld = out
+        if kept < n:
+            self._remove(kept)
+        self.cell_start = start[:ncells + 1]
+        n = self.n
+        count = cu.device_array(n, dtype=np.int64)
+        grid = (d["x"], d["y"], d["kind"], bool(self.module.FLUID_PAIRS_ONLY),
+                self.cell_start, cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy,
+                self.d_prm, cl.cell_size * cl.cell_size)
+        self._launch(self.module.count_neighbours, n, *grid, count)
+        nb_start = cu.device_array(n + 1, dtype=np.int64)
+        self._scan_scratch = D.exclusive_scan(count, nb_start, self._scan_scratch)
+        total = int(nb_start[n])
+        self.bytes_d2h += 8
+        idx = self._nb[1]
+        if idx is None or idx.shape[0] < total:
+            idx = cu.device_array(int(total * 1.1) + 16, dtype=np.uint32)
+        self._launch(self.module.fill_neighbours, n, *grid, nb_start, idx)
+        self._nb = (nb_start, idx)
+        self.pairs = total
+        xr = cu.device_array(n, dtype=np.float64)
+        yr = cu.device_array(n, dtype=np.float64)
+        xr.copy_to_device(d["x"])
+        yr.copy_to_device(d["y"])
+        self._ref = (xr, yr)
+        self.list_built += 1
+        self._dirty = True
+
+    def _remove(self, kept: int):
+        """Particles binned outside the box (sorted last) leave the simulation."""
+        from sphfoam.engine.simulation import Removal
+
+        d = self.d
+        ids = self._get(d["id"][kept:])
+        where = np.column_stack([self._get(d["x"][kept:]), self._get(d["y"][kept:])])
+        rem = Removal(self.time, int(ids.shape[0]), ids, where)
+        self.removals.append(rem)
+        if self.on_removal:
+            self.on_removal(rem)
+        for k in list(d):
+            d[k] = d[k][:kept]
+        for k in list(self.d_extra):
+            dict.__setitem__(self.d_extra, k, self.d_extra[k][:kept])
+        self.d_fld = self.d_fld[:, :kept]
+        self.d_aux = self.d_aux[:, :kept]
+        self._kept = {}
+        self.n = kept
+
+    # --- stages ---------------------------------------------------------------------------
+    def _args(self):
+        d = self.d
+        nb_start, nb_idx = self._nb
+        if self.d_aux.shape[1] != self.n:
+            self.d_aux = self.cuda.to_device(np.zeros((len(self.module.AUX), self.n),
+                                                      dtype=self.dtype))
+        args = (d["x"], d["y"], d["u"], d["v"], d["rho"], d["p"], d["c"], d["m"], d["kind"],
+                nb_start, nb_idx, self.d_prm, self.d_aux, self.d_fld)
+        if self.module.PAIR_CACHE:
+            if self._pc is None or self._pc.shape[1] != nb_idx.shape[0]:
+                self._pc = self.cuda.device_array((len(self.module.PAIR_CACHE),
+                                                   nb_idx.shape[0]), dtype=self.dtype)
+            args += (self._pc,)
+        return args
+
+    def _prepass(self, args, stage="rates"):
+        m = self.module
+        if not m.N_PREPASS or stage not in m.PREPASS_BEFORE:
+            return
+        if m.PREPASS_ONCE:
+            if self._prepassed:
+                return
+            if self._prepassed is not None:
+                self._prepassed = True
+        for i in range(m.N_PREPASS):
+            self._timed("prepass", self._launch, getattr(m, f"prepass_{i}"), self.n, *args)
+
+    def eos(self):
+        d = self.d
+        self._timed("eos", self._launch, self.module.equation_of_state, self.n, d["rho"],
+                    d["p"], d["c"], self.d_prm)
+
+    def rates(self):
+        args = self._args()
+        self._prepass(args)
+        sigma = True
+        if self._evaluations is not None:
+            sigma = self._evaluations == 0 or not getattr(
+                self.integrator, "time_step_from_first_evaluation", False)
+            self._evaluations += 1
+        d = self.d
+        self._timed("rates", self._launch, self.module.rates, self.n, *args, d["ax"], d["ay"],
+                    d["drho"], d["sigma"], sigma)
+
+    def density_rate(self):
+        args = self._args()
+        self._prepass(args, "density")
+        self._timed("density", self._launch, self.module.density_rate, self.n, *args,
+                    self.d["drho"])
+
+    def step_pass(self):
+        if getattr(self.module, "HAS_STEP", False):
+            self._timed("step_pass", self._launch, self.module.step_pass, self.n,
+                        *self._args())
+
+    def filter_density(self):
+        self.eos()
+        args = self._args()
+        self._prepass(args, "filter")
+        out = self.cuda.device_array_like(self.d["rho"])
+        self._timed("filter", self._launch, self.module.density_filter, self.n, *args, out)
+        self.d["rho"] = out
+
+    def time_step(self) -> float:
+        """T(3.88)-(3.90) as a device reduction; one pair of scalars comes back."""
+        if not self.adjust_time_step:
+            return self.delta_t
+        d = self.d
+        self._red.copy_to_device(np.array([math.inf, 0.0, 0.0]))
+        self._timed("time_step", self._launch, self.D.time_step_reduce, self.n, self.h,
+                    d["c"], d["sigma"], d["ax"], d["ay"], d["kind"], self._red)
+        dmin, fmax, _ = self._get(self._red)
+        if self.force_condition and fmax > 0.0:
+            dmin = min(dmin, math.sqrt(self.h / math.sqrt(fmax)))
+        return min(self.beta * dmin, self.max_delta_t, self.model_dt_limit)
+
+    def advect(self):
+        """No advection model has a device form yet: positions move with the velocity."""
+        self._pU = (self.d["u"], self.d["v"])
+
+    def _extra(self, k):
+        return self.d_extra[k] if k in self.d_extra else \
+            self.d_fld[list(self.module.FIELDS).index(k)]
+
+    def move_walls(self, t: float):
+        """Every wall with a prescribed motion where it is at time ``t`` (a kernel over the
+        particles of each wall entry: r = r0 + d(t), v = d'(t))."""
+        if not self.motions or "patch" not in self.d_extra and \
+                "patch" not in self.module.FIELDS:
+            return
+        d = self.d
+        for which, mot in self.motions.items():
+            (ox, oy), (uu, vv) = mot.displacement(t), mot.velocity(t)
+            self._timed("walls", self._launch, self.D.prescribe_patch, self.n, d["x"], d["y"],
+                        d["u"], d["v"], self._extra("patch"), self._extra("x0"),
+                        self._extra("y0"), float(which), float(ox), float(oy), float(uu),
+                        float(vv))
+
+    # --- the integrator's updates ---------------------------------------------------------
+    def run_update(self, name: str, scalars: dict):
+        if self.updates is None:
+            from sphfoam.engine.cuda.build import build_updates
+
+            self.updates = build_updates(self.integrator, 2)
+            self._upd = {u.name: u for u in self.integrator.updates}
+            self._kept_names = {}
+            for g, prec in getattr(self.integrator, "kept", {}).items():
+                for i, c in enumerate(components(g, 2)):
+                    self._kept_names[c] = (g, i, prec)
+            self._hist = {}
+            for g, tmpl in getattr(self.integrator, "history", {}).items():
+                self._hist.update(zip(components(g, 2), field_components(tmpl, 2)))
+        upd = self._upd[name]
+        args = [self._array(a) for a in self.updates.ARRAYS[name]]
+        args += [scalars[s] for s in upd.scalars]
+        self._timed("update", self._launch, getattr(self.updates, f"update_{name}"), self.n,
+                    *args)
+        self._dirty = True
+
+    def _array(self, a):
+        d = self.d
+        names = {"x": "x", "y": "y", "u": "u", "v": "v", "rho": "rho", "drho": "drho",
+                 "kind": "kind", "ax": "ax", "ay": "ay"}
+        if a in names:
+            return d[names[a]]
+        if a in self._kept_names:
+            g, i, prec = self._kept_names[a]
+            dt = self.dtype if prec == "working" else np.float64
+            buf = self._kept.get(g)
+            if buf is None or buf[0].shape[0] != self.n:
+                buf = tuple(self.cuda.device_array(self.n, dtype=dt)
+                            for _ in components(g, 2))
+                self._kept[g] = buf
+            return buf[i]
+        if a in self._hist:
+            k = self._hist[a]
+            if k not in self.d_extra:
+                self.d_extra[k] = np.zeros(self.n)
+            return self.d_extra[k]
+        adv = components("pU@", 2)
+        if a in adv:
+            return self._pU[adv.index(a)]
+        raise ValueError(f"integrator {self.integrator.name!r}: unknown array {a!r}")
+
+    # --- stepping -------------------------------------------------------------------------
+    def step(self, dt_remaining: float = math.inf) -> float:
+        """Re-sort, filter the density when due, then one step of the integrator."""
+        self.move_walls(self.time)
+        self._timed("neighbours", self.neighbour_update)
+        self.step_pass()
+        self.filtered = bool(self.filter_schedule and
+                             self.filter_schedule.due_before_step(self.step_index))
+        if self.filtered:
+            self.filter_density()
+        self._prepassed = False
+        self._evaluations = 0
+        try:
+            dt = self.integrator.step(self._stepping, dt_remaining)
+        finally:
+            self._prepassed = None
+            self._evaluations = None
+            self._pU = None
+        self.last_dt = dt
+        self.time += dt
+        self.step_index += 1
+        self._dirty = True
+        return dt
