@@ -148,10 +148,24 @@ class Term:
     #: once (e.g. a pressure gradient and a viscous term along grad W: one product per
     #: component and side instead of one per term)
     force: str = ""
+    #: the dimensions the term has code for: those every per-dimension code field
+    #: (``{2: "...", 3: "..."}``) names, (2, 3) where every code field is a plain string
+    #: (written once with ``@``, ``dot``, ``sum@``). A plan of another dimension refuses it
+    dims: tuple[int, ...] = ()
     #: the model that contributed it (set by :func:`collect`)
     owner: object = field(default=None, compare=False)
 
     def __post_init__(self):
+        dims = {2, 3}
+        for part in CODE_PARTS:
+            code = getattr(self, part)
+            if isinstance(code, dict):
+                code = tuple(sorted(code.items()))
+                object.__setattr__(self, part, code)
+            if isinstance(code, tuple):
+                dims &= {d for d, _ in code}
+        if not self.dims:
+            object.__setattr__(self, "dims", tuple(sorted(dims)))
         if self.force:
             f = f"f_{self.name}"
             pair = f"{f} = {self.force}\nacc_@ -= mb * {f} * gW@"
@@ -161,6 +175,13 @@ class Term:
                                     "code are written from its force; give neither")
             object.__setattr__(self, "pair", pair)
             object.__setattr__(self, "reaction", reaction)
+
+    def code(self, part: str, dim: int = 2) -> str:
+        """The ``part`` code (``pair``, ``init``, ``final``, ``reaction``, ``force``) of
+        the ``dim``-dimensional form: a plain string, or the entry of ``dim`` of a code given
+        per dimension ("" where it has none: the plan refuses such a term in ``dim``)."""
+        code = getattr(self, part)
+        return dict(code).get(dim, "") if isinstance(code, tuple) else code
 
     @property
     def on_demand(self) -> bool:
@@ -173,19 +194,101 @@ class Term:
         return f"{o.family} {o.name!r} (term {self.name!r})" if o is not None else self.name
 
 
+#: the code fields of a :class:`Term`, each a string or a mapping {dimension: string}
+CODE_PARTS = ("pair", "init", "final", "reaction")
+
+
 class ContractError(ValueError):
     """A selection whose terms do not fit together (raised before anything compiles)."""
 
 
+_REDUCTION = re.compile(r"(?<![\w.])(dot|sum@)\(")
+_ATOM = re.compile(r"^(?:[A-Za-z_]\w*(?:\[[^\[\]]*\])?|\d+(?:\.\d*)?(?:e[-+]?\d+)?)$")
+
+
+def _close(text: str, start: int) -> int:
+    """The index of the parenthesis closing the one opened just before ``start``."""
+    depth = 1
+    for i in range(start, len(text)):
+        if text[i] in "([{":
+            depth += 1
+        elif text[i] in ")]}":
+            depth -= 1
+            if depth == 0:
+                return i
+    raise ContractError(f"unbalanced parentheses in {text!r}")
+
+
+def _top_level(text: str) -> list[str]:
+    """``text`` split at its commas outside parentheses and brackets."""
+    parts, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append(text[start:i])
+            start = i + 1
+    return [p.strip() for p in parts + [text[start:]]]
+
+
+def _product(text: str) -> bool:
+    """Whether ``text`` is a product of factors (no operator binding looser than ``*``, ``/``
+    outside parentheses): such a term of a sum needs no parentheses of its own."""
+    depth = 0
+    for i, ch in enumerate(text):
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif depth == 0 and (ch in "+-<>=!,%" or (ch == " " and re.match(
+                r" (if|else|and|or|not|for|in) ", text[i:]))):
+            return False
+    return True
+
+
+def _component(text: str, axis: str, vel: str) -> str:
+    return text.replace("U@", vel).replace("@", axis)
+
+
+def _reductions(line: str, dims) -> str:
+    """``dot(A, B)`` and ``sum@(E)`` of ``line`` written out over the components."""
+    while True:
+        m = _REDUCTION.search(line)
+        if m is None:
+            return line
+        end = _close(line, m.end())
+        inner = _reductions(line[m.end():end], dims)
+        if m.group(1) == "dot":
+            args = _top_level(inner)
+            if len(args) != 2:
+                raise ContractError(f"dot takes two vectors: {line!r}")
+            a, b = (x if _ATOM.match(_component(x, "x", "u")) else f"({x})" for x in args)
+            out = " + ".join(f"{_component(a, ax, v)} * {_component(b, ax, v)}"
+                             for ax, v in dims)
+        else:
+            e = inner.strip()
+            e = e if _product(e) else f"({e})"
+            out = " + ".join(_component(e, ax, v) for ax, v in dims)
+        line = f"{line[:m.start()]}({out}){line[end + 1:]}"
+
+
 def expand_components(code: str, dims=(("x", "u"), ("y", "v"))) -> str:
-    """Write every line holding ``@`` once per component (see the module docstring)."""
+    """Write every line holding ``@`` once per component, after writing out its reductions
+    ``dot(A@, B@)`` (A_x * B_x + A_y * B_y ...) and ``sum@(E@)`` (E_x + E_y ...); a line
+    whose only ``@`` are in reductions is written once (see the module docstring)."""
     out = []
     for line in textwrap.dedent(code).strip("\n").splitlines():
         if "@" not in line:
             out.append(line)
             continue
+        line = _reductions(line, dims)
+        if "@" not in line:
+            out.append(line)
+            continue
         for axis, vel in dims:
-            out.append(line.replace("U@", vel).replace("@", axis))
+            out.append(_component(line, axis, vel))
     return "\n".join(out)
 
 
@@ -248,7 +351,8 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
                                 "own to mirror")
         for name in t.sums:
             if "prepass" not in t.stages or \
-                    not re.search(rf"(?m)^{re.escape(name)} = 0\.0$", t.init):
+                    not all(re.search(rf"(?m)^{re.escape(name)} = 0\.0$", t.code("init", d))
+                            for d in t.dims):
                 raise ContractError(f"{t.who()} declares the sum {name!r}: only a prepass term "
                                     f"whose init sets it ('{name} = 0.0') may")
     pre = [t for t in terms if "prepass" in t.stages and not t.on_demand]
@@ -263,7 +367,8 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
             if not t.on_demand or t.reads:
                 raise ContractError(f"{t.who()} caches {name!r} but is not a definer of pair "
                                     "quantities from the geometry alone (on demand, no reads)")
-            if not re.search(rf"(?m)^{re.escape(name)} = ", t.pair):
+            if not all(re.search(rf"(?m)^{re.escape(name)} = ", t.code("pair", d))
+                       for d in t.dims):
                 raise ContractError(f"{t.who()} caches {name!r}, which its pair code does not "
                                     f"define on a line of its own ('{name} = ...')")
     for t in terms:
