@@ -292,8 +292,23 @@ def expand_components(code: str, dims=(("x", "u"), ("y", "v"))) -> str:
     return "\n".join(out)
 
 
-def collect(models) -> list[Term]:
-    """Every term of the selected models, in selection order, with its owner."""
+#: (axis, velocity) of each component, x, y, z
+AXES = (("x", "u"), ("y", "v"), ("z", "w"))
+
+
+def expand_names(names: tuple[str, ...], dim: int = 2) -> tuple[str, ...]:
+    """Declared names (``reads``, ``writes``, ``corrects``, ``sums``) with each one holding
+    ``@`` written once per component: ``aux.xsph_dU@`` is ``aux.xsph_du``, ``aux.xsph_dv``."""
+    out = []
+    for n in names:
+        out += [n.replace("U@", v).replace("@", ax) for ax, v in AXES[:dim]] if "@" in n \
+            else [n]
+    return tuple(out)
+
+
+def collect(models, dim: int = 2) -> list[Term]:
+    """Every term of the selected models, in selection order, with its owner and its declared
+    names written out for ``dim`` dimensions (see :func:`expand_names`)."""
     terms = []
     for m in models:
         for t in m.terms():
@@ -306,7 +321,9 @@ def collect(models) -> list[Term]:
                     + "; ".join(f"{what} {vals}" for what, vals in
                                 (("stage", unknown), ("neighbour kind", bad_sees),
                                  ("particle kind", bad_applies)) if vals))
-            terms.append(replace(t, owner=m))
+            terms.append(replace(t, owner=m, **{
+                k: expand_names(getattr(t, k), dim)
+                for k in ("reads", "writes", "corrects", "sums")}))
     return terms
 
 
@@ -351,7 +368,8 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
                                 "own to mirror")
         for name in t.sums:
             if "prepass" not in t.stages or \
-                    not all(re.search(rf"(?m)^{re.escape(name)} = 0\.0$", t.code("init", d))
+                    not all(re.search(rf"(?m)^{re.escape(name)} = 0\.0$",
+                                      expand_components(t.code("init", d), AXES[:d]))
                             for d in t.dims):
                 raise ContractError(f"{t.who()} declares the sum {name!r}: only a prepass term "
                                     f"whose init sets it ('{name} = 0.0') may")
@@ -367,7 +385,8 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
             if not t.on_demand or t.reads:
                 raise ContractError(f"{t.who()} caches {name!r} but is not a definer of pair "
                                     "quantities from the geometry alone (on demand, no reads)")
-            if not all(re.search(rf"(?m)^{re.escape(name)} = ", t.code("pair", d))
+            if not all(re.search(rf"(?m)^{re.escape(name)} = ",
+                                 expand_components(t.code("pair", d), AXES[:d]))
                        for d in t.dims):
                 raise ContractError(f"{t.who()} caches {name!r}, which its pair code does not "
                                     f"define on a line of its own ('{name} = ...')")

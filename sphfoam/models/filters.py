@@ -181,6 +181,6 @@ class DeltaSPH(DensityFilter):
     def terms(self):
         return [Term("densityDiffusion", ("rates", "density"), reads=("gradW",),
                      writes=("drho",), pair=(
-                         "filt_psi = 2.0 * (rhoa - rhob) * (dx_ab * gWx + dy_ab * gWy) / "
+                         "filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / "
                          "(r2 + eta2)\n"
                          "drho_a += filt_dc0 * h * filt_psi * mb / rhob\n"))]

@@ -91,10 +91,10 @@ class Laminar(Viscosity):
             return math.inf
         return 0.125 * ctx.h * ctx.h / ctx.nu
 
-    pair_code = ("lam = mb * visc_mu2 / (rhoa * rhob) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)\n"
+    pair_code = ("lam = mb * visc_mu2 / (rhoa * rhob) * dot(d@_ab, gW@) / (r2 + eta2)\n"
                  "acc_@ += lam * U@_ab")
     # r_ba . grad_b W_ba = r_ab . grad_a W_ab, v_ba = -v_ab
-    reaction_code = ("lam_b = ma * visc_mu2 / (rhob * rhoa) * (dx_ab * gWx + dy_ab * gWy) / "
+    reaction_code = ("lam_b = ma * visc_mu2 / (rhob * rhoa) * dot(d@_ab, gW@) / "
                      "(r2 + eta2)\n"
                      "acc_b_@ -= lam_b * U@_ab")
 
