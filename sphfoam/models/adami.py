@@ -101,7 +101,8 @@ class Adami(Boundary):
                                                     "field.corner")
         return [Term("wallState", ("prepass",), init=_INIT, pair=_PAIR, final=_FINAL + slip,
                      applies=("wall",), sees=("fluid",), reads=reads,
-                     writes=("rho", "u"), corrects=("p",), weighted=False)]
+                     writes=("rho", "u"), corrects=("p",), weighted=False,
+                     dims=(2, 3) if self.coeffs.noSlip else (2,))]   # (2-D wall normals)
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
     def attach(self, run):

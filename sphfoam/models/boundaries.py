@@ -136,6 +136,8 @@ if chi > 0.0 and yn < 2.0 * h:
 
 #: the wall fields the repulsive forces read
 _GEOMETRY_READS = ("field.nx", "field.ny", "field.corner")
+#: the wall geometry (normal, tangential distance) is written for 2-D walls only
+_GEOMETRY_DIMS = (2,)
 
 
 class _Repulsive(Boundary):
@@ -152,7 +154,8 @@ class _Repulsive(Boundary):
 
     def terms(self):
         return [Term("wallForce", ("rates",), pair=self.force_code, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False,
+                     dims=_GEOMETRY_DIMS)]
 
 
 @register
@@ -471,4 +474,5 @@ else:
                      init="bnd_count = 0", pair="bnd_count += 1", final=self._STEP_FINAL,
                      reads=("field.nFull",), writes=("aux.bnd_wet", "rho"), weighted=False),
                 Term("wallForce", ("rates",), pair=_MONAGHAN_KOS, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False,
+                     dims=_GEOMETRY_DIMS)]

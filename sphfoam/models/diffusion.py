@@ -154,9 +154,9 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
     def terms(self):
         return [Term("renormalisedDensityGradient", ("prepass",), init=self._INIT,
                      pair=self._PAIR, final=self._FINAL, applies=("all",), sees=("all",),
-                     reads=("gradW",), writes=self._G),
+                     reads=("gradW",), writes=self._G, dims=(2,)),
                 Term("densityDiffusion", ("rates", "density"), pair=self._DIFFUSION,
-                     reads=("gradW", *self._G), writes=("drho",))]
+                     reads=("gradW", *self._G), writes=("drho",), dims=(2,))]
 
 
 @register

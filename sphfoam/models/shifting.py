@@ -312,11 +312,11 @@ else:
                 sums += _sum_names(g_init)
         return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
                      pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
-                     reads=("gradW",), writes=self._SURF),
+                     reads=("gradW",), writes=self._SURF, dims=(2,)),
                 Term("shiftingVector", ("prepass",), init=init,
                      pair=pair, final=final, applies=("all",), sees=("all",),
                      reads=("W", "gradW", *self._SURF), writes=writes,
-                     reaction=reaction, sums=sums,
+                     reaction=reaction, sums=sums, dims=(2,),
                      nonfluid_discarded=True)]                   # walls are not shifted
 
     @property

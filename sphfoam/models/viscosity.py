@@ -121,7 +121,7 @@ def velocity_gradient_term(p: str, final: str, writes: tuple[str, ...]) -> Term:
     included, over every neighbour) into ``{p}_dudx`` ... ``{p}_dvdy``, then ``final``."""
     return Term("velocityGradient", ("prepass",), init=_GRADIENT_INIT.format(p=p),
                 pair=_GRADIENT_PAIR.format(p=p), final=final, applies=("all",),
-                sees=("all",), reads=("gradW",), writes=writes)
+                sees=("all",), reads=("gradW",), writes=writes, dims=(2,))
 
 
 @register

@@ -189,4 +189,5 @@ def wall_law_term(law: str) -> Term:
     return Term("wallLaw", ("prepass",), init=_INIT, pair=_PAIR,
                 final=_FINAL.replace("{call}", _CALLS[law]), applies=("wall",),
                 sees=("all",), reads=("W", "field.nx", "field.ny", "field.wallDist"),
-                writes=("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy", "aux.turb_ustar"))
+                writes=("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy", "aux.turb_ustar"),
+                dims=(2,))
