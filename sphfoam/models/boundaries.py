@@ -84,16 +84,14 @@ class _NoSlip(Coeffs):
 #: wall normal of neighbour b and the normal / tangential distances of a from it; a corner
 #: particle repels radially (its normal is the direction b -> a and chi = 1)
 _GEOMETRY = """\
-bnx = fld[F_nx, b]
-bny = fld[F_ny, b]
+bn@ = fld[F_n@, b]
 if fld[F_corner, b] > 0.5:
     rab = math.sqrt(r2)
-    bnx = dx_ab / rab
-    bny = dy_ab / rab
+    bn@ = d@_ab / rab
     yn = rab
     chi = 1.0
 else:
-    yn = dx_ab * bnx + dy_ab * bny
+    yn = dot(d@_ab, bn@)
     xt = abs(dy_ab * bnx - dx_ab * bny)
     chi = 1.0 - xt / bnd_dx if xt < bnd_dx else 0.0
 """
@@ -105,13 +103,12 @@ else:
 _MONAGHAN_KOS = _GEOMETRY + """\
 if chi > 0.0 and yn < bnd_range:
     qn = max(yn, bnd_ymin) / bnd_range
-    vn = -(u_ab * bnx + v_ab * bny)
+    vn = -dot(U@_ab, bn@)
     amk = bnd_a0
     if vn > 0.0:
         amk += bnd_c0 * vn * inv_h
     gam = amk * (1.0 - qn) / math.sqrt(qn) * chi
-    acc_x += gam * bnx
-    acc_y += gam * bny
+    acc_@ += gam * bn@
 """
 
 #: Monaghan et al. (2003), T(3.73)-(3.76): f_ab = m_b/(m_a + m_b) Gamma(y) chi(x) n_b,
@@ -129,8 +126,7 @@ if chi > 0.0 and yn < 2.0 * h:
         gam = 0.5 * bet * (2.0 - qn) * (2.0 - qn)
     ma = m[a]
     gam *= mb / (ma + mb) * chi
-    acc_x += gam * bnx
-    acc_y += gam * bny
+    acc_@ += gam * bn@
 """
 
 
