@@ -22,8 +22,12 @@ nothing provides, naming the models involved.
 Vector components. A line containing ``@`` is written once per spatial component with ``@``
 replaced by ``x``, ``y`` (and ``z`` in three dimensions), and ``U@`` by the velocity
 component ``u``, ``v`` (``w``): ``acc_@ -= pterm * gW@`` is ``acc_x -= pterm * gWx`` and
-``acc_y -= pterm * gWy``. A backend for another dimension or device expands the same text
-with its own components (see docs/developing.md).
+``acc_y -= pterm * gWy``. Reductions: ``dot(A@, B@)`` is ``(A_x * B_x + A_y * B_y [+ A_z *
+B_z])`` and ``sum@(E@)`` is ``(E_x + E_y [+ E_z])``; a line whose only ``@`` are inside them
+is written once. A term whose algebra is per dimension gives its code per dimension
+(``pair={2: "...", 3: "..."}``) or says ``dims=(2,)``; the plan refuses it in any other
+dimension. A backend for another dimension or device expands the same text with its own
+components (see docs/developing.md).
 """
 
 from __future__ import annotations
@@ -66,9 +70,9 @@ PARTICLE_KINDS = ("fluid", "wall", "wetWall", "all")
 #: eta2, gravity), with the names they have in the code
 QUANTITIES = {
     "W": "Wab, the kernel value W(r_ab, h)",
-    "gradW": "gWx, gWy: grad_a W_ab",
-    "uc": "uc_ab, vc_ab: the velocity difference the continuity equation uses",
-    "acc": "acc_x, acc_y: dv_a/dt (accumulated)",
+    "gradW": "gWx, gWy (gWz): grad_a W_ab",
+    "uc": "uc_ab, vc_ab (wc_ab): the velocity difference the continuity equation uses",
+    "acc": "acc_x, acc_y (acc_z): dv_a/dt (accumulated)",
     "drho": "drho_a: drho_a/dt (accumulated)",
     "rho_new": "rho_new: the filtered density of a (filter stage)",
     "rho": "rho[a]: the density of a, set in place (step stage)",
