@@ -104,3 +104,27 @@ def test_a_model_without_a_3d_form_is_refused_by_name():
     with pytest.raises(T.ContractError, match="kernelCorrection 'csph' has no 3-D form"):
         sel.plan()
     dataclasses.replace(sel, dim=2).plan()
+
+
+def test_the_loop_bodies_take_the_code_of_the_plans_dimension():
+    """A term with code per dimension: the generated source holds the form of the case's
+    dimension (read through ``Term.code`` by the loop bodies)."""
+    from sphfoam.engine.bodies import LoopBodies
+    from sphfoam.models.viscosity import VISCOUS_SEES, Viscosity
+
+    class PerDimension(Viscosity):
+        name = "perDimensionExample"
+
+        def params(self, ctx):
+            return {"visc_k2": 1.0, "visc_k3": 2.0}
+
+        def terms(self):
+            return [T.Term("viscosity", ("rates",), sees=VISCOUS_SEES, reads=("gradW",),
+                           writes=("acc",), pair={2: "acc_@ += visc_k2 * mb * gW@",
+                                                  3: "acc_@ -= visc_k3 * mb * gW@"})]
+
+    for dim, want, other in ((2, "acc_y += visc_k2 * mb * gWy", "visc_k3"),
+                             (3, "acc_z -= visc_k3 * mb * gWz", "visc_k2")):
+        sel = dataclasses.replace(selection(), viscosity=PerDimension(), dim=dim)
+        body = LoopBodies(sel.plan()).gather(sel.plan().stage("rates", "fluid"))
+        assert want in body and other not in body, (dim, body)
