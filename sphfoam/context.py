@@ -18,6 +18,7 @@ class CaseContext:
     fluid_height: float  # height of the tallest fluid block, for v_max estimates
     c0: float = 0.0    # reference speed of sound (set once the equation of state is known)
     support: float = 0.0  # kernel support radius kappa h (m), set with the kernel
+    dim: int = 2       # the dimension of the case: 2 (x, y) or 3 (x, y, z)
 
     @property
     def eta2(self) -> float:

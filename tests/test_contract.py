@@ -124,8 +124,10 @@ def assert_declarations_match(model):
     """Every quantity the terms' code uses is declared (also used for models' non-default
     options, e.g. tests/test_walllaw.py)."""
     for t in model.terms():
-        code = "\n".join((t.init, t.pair, t.final))
-        declared = set(t.reads) | set(t.writes) | set(t.corrects)
+        # the 2-D form, its @ and declared names written out (sphfoam.engine.terms)
+        code = "\n".join(T.expand_components(t.code(p, 2), T.AXES[:2])
+                         for p in ("init", "pair", "final"))
+        declared = set(T.expand_names(t.reads + t.writes + t.corrects))
         assert ("Wab" in code) == ("W" in declared), (t.name, "W")
         assert ("gWx" in code or "gW@" in code) == ("gradW" in declared), (t.name, "gradW")
         for a in re.findall(r"aux\[I_(\w+),", code):

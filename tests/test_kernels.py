@@ -291,3 +291,53 @@ def test_gaussian_exponential_is_exact_to_round_off():
     # a run blowing up (NaN, inf or huge q^2) reads nothing outside the table
     for bad in (float("nan"), float("inf"), -1.0, 1e300):
         exp_neg(bad)
+
+
+# --- normalisation per dimension, T(3.4) in 2-D and 3-D ----------------------------------------
+def _shifted_lattice_sums(k, dim, per_h):
+    """sum_b W_ab V_b and sum_b grad_a W_ab V_b over a cubic lattice of spacing h / per_h
+    (h = 1) whose points are shifted off the origin by a fraction of a spacing along each
+    axis (so that the gradient sum is not zero by the lattice's symmetry alone)."""
+    s = 1.0 / per_h
+    m = int(math.ceil(k.support * per_h)) + 1
+    ax = np.arange(-m, m + 1) * s
+    r = np.stack([g.ravel() for g in np.meshgrid(*([ax] * dim), indexing="ij")], axis=1)
+    r = r + np.array((0.31, 0.17, 0.43)[:dim]) * s
+    q = np.sqrt((r * r).sum(axis=1))
+    r, q = r[q < k.support], q[q < k.support]
+    f = np.array([k.f(float(x)) for x in q])
+    g = np.array([k.dfdq_q(float(x)) for x in q])
+    a = k.alpha(dim)
+    return a * f.sum() * s**dim, (a * g[:, None] * r).sum(axis=0) * s**dim
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_normalisation_per_dimension(kernel, dim):
+    """int W dV = 1 by the radial integral (to round-off) and by a lattice sum, and
+    int grad W dV = 0 by the lattice sum, to 1e-6 in 2-D and 3-D (h = 1). The lattice has
+    h / 60 spacing in 2-D and h / 24 in 3-D: the finite Gaussian's slope jump at q = Q limits
+    its gradient sum to about 1e-7."""
+    k = kernel
+    knots = [t for t in _knots(k) if 0.0 < t < k.support]
+    shell = 2.0 * math.pi if dim == 2 else 4.0 * math.pi
+    val, _ = integrate.quad(lambda q: shell * q**(dim - 1) * k.alpha(dim) * k.f(q), 0.0,
+                            k.support, points=knots or None, epsabs=1e-13, epsrel=1e-13,
+                            limit=200)
+    assert abs(val - 1.0) < 1e-9, (k.name, dim, val)
+    w, gw = _shifted_lattice_sums(k, dim, 60 if dim == 2 else 24)
+    assert abs(w - 1.0) < 1e-6, (k.name, dim, w)
+    assert np.abs(gw).max() < 1e-6, (k.name, dim, gw)
+
+
+def test_coefficients_per_dimension(kernel):
+    """kern_w = alpha_d / h^d and kern_gw = alpha_d / h^(d+2) from the case's dimension."""
+    from sphfoam.context import CaseContext
+
+    h = 0.013
+    for dim in (2, 3):
+        ctx = CaseContext(dx=0.01, h=h, rho0=1000.0, nu=1e-6, g=(0.0,) * dim,
+                          fluid_height=0.3, dim=dim)
+        prm = kernel.params(ctx)
+        assert prm["kern_w"] == kernel.alpha(dim) / h**dim
+        assert prm["kern_gw"] == kernel.alpha(dim) / h**(dim + 2)
+    assert kernel.alpha(2) == kernel.alpha_2d and kernel.alpha(3) == kernel.alpha_3d

@@ -162,6 +162,11 @@ class LoopBodies:
         """``code`` expanded to the components of the case's dimension."""
         return expand(code, self.dim)
 
+    def _code(self, t, part: str) -> str:
+        """The ``part`` code of term ``t`` in the case's dimension (every term's code is read
+        here: a term may give it per dimension, see ``Term.code``)."""
+        return t.code(part, self.dim)
+
     def _pair_geometry(self) -> dict:
         """The relative position of the pair (one line per component, in the working
         precision) and r2, for the list loop templates."""
@@ -198,7 +203,7 @@ class LoopBodies:
         rest = [t for t in terms if t not in pre]
         pre_code = []
         for t in pre:
-            code = t.pair
+            code = self._code(t, "pair")
             if cache == "read" and code:
                 for n in t.cache:
                     if n in self.plan.cache:
@@ -224,9 +229,9 @@ class LoopBodies:
         sees = {id(t): self.plan.sees(t) for t in rest}
         alls = [t for t in rest if "all" in sees[id(t)]]
         if alls:
-            return "\n".join(self._x(getattr(t, part)) for t in rest
-                             if getattr(t, part))
-        per_kind = {k: [t for t in rest if k in sees[id(t)] and getattr(t, part)]
+            return "\n".join(self._x(self._code(t, part)) for t in rest
+                             if self._code(t, part))
+        per_kind = {k: [t for t in rest if k in sees[id(t)] and self._code(t, part)]
                     for k in self.plan.kinds}
         groups: list[tuple[list[str], list]] = []
         for k, ts in per_kind.items():
@@ -240,7 +245,7 @@ class LoopBodies:
         if not groups:
             return ""
         if len(groups) == 1 and set(groups[0][0]) == set(self.plan.kinds) and self.plan.complete:
-            return "\n".join(self._x(getattr(t, part)) for t in groups[0][1])
+            return "\n".join(self._x(self._code(t, part)) for t in groups[0][1])
         order = list(self.plan.kinds)
         out = []
         for gi, (ks, ts) in enumerate(groups):
@@ -252,7 +257,7 @@ class LoopBodies:
                 if excl:
                     c = f"({c}) and not ({' or '.join(excl)})"
                 conds.append(c)
-            body = "\n".join(self._x(getattr(t, part)) for t in ts)
+            body = "\n".join(self._x(self._code(t, part)) for t in ts)
             kw = "if" if gi == 0 else "elif"
             covered = {j for g in groups for j in g[0]} == set(self.plan.kinds)
             if gi == len(groups) - 1 and gi > 0 and covered and self.plan.complete:
@@ -279,8 +284,8 @@ class LoopBodies:
                             body=_block(self.neighbour_body(terms, sigma, cache), 4))
 
     def particle_code(self, terms: list, part: str) -> str:
-        return "\n".join(self._x(getattr(t, part)) for t in terms
-                         if getattr(t, part))
+        return "\n".join(self._x(self._code(t, part)) for t in terms
+                         if self._code(t, part))
 
     def gather(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """init, the neighbour loop and final of ``terms`` for one particle a."""
@@ -306,7 +311,7 @@ class LoopBodies:
         sums = self.plan.prepass_half_sums()
         body = [self.neighbour_body(ts, cache="store" if self.plan.cache else None),
                 "\n".join(f"{n}_b = 0.0" for n in sums),
-                "\n".join(self._x(t.reaction) for t in ts if t.reaction),
+                "\n".join(self._x(self._code(t, "reaction")) for t in ts if t.reaction),
                 "\n".join(f"hs[S_{n}, b] += {n}_b" for n in sums)]
         loop = _HALF.format(**self._pair_geometry(),
                             body=_block("\n".join(body), 4))
@@ -366,7 +371,7 @@ class LoopBodies:
         cache = self.plan.cache_mode(stage)
         pre_code = []
         for t in pre:
-            code = t.pair
+            code = self._code(t, "pair")
             if cache and code:
                 for n in t.cache:
                     if n in self.plan.cache:
@@ -438,11 +443,11 @@ class LoopBodies:
         for t in ts:
             folded = fold_a and t.force
             if t.pair and not folded:
-                code.append(self._x(t.pair))
+                code.append(self._x(self._code(t, "pair")))
             elif folded and t is forces[0]:
                 code.append(fold_a)
             if t.reaction and not folded:
-                code_b.append(self._x(t.reaction))
+                code_b.append(self._x(self._code(t, "reaction")))
             elif folded and t is forces[0]:
                 code_b.append(fold_b)
         code += code_b

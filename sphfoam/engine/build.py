@@ -9,6 +9,8 @@ with ``cache=True``, so a second run of the same selection loads machine code fr
 
 from __future__ import annotations
 
+import dataclasses
+
 import hashlib
 import importlib.util
 import os
@@ -60,6 +62,9 @@ def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
     ``core`` (h, inv_h, support2, eta2, gravity and, for periodic axes, lx, ly, lz) defaults to
     :func:`core_parameters` of ``sel`` and ``ctx``; given, it must agree with them.
     """
+    if getattr(ctx, "dim", sel.dim) != sel.dim:
+        # the models' coefficients (the kernel's alpha_d / h^d) in the plan's dimension
+        ctx = dataclasses.replace(ctx, dim=sel.dim)
     derived = core_parameters(sel, ctx, domain_lo, domain_hi)
     if core is None:
         core = derived

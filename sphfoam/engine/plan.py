@@ -96,7 +96,12 @@ class Plan:
         #: ghosts): the maximum of T(3.89), the one sum not weighted by mass, skips them
         self.massless_ghosts = bool(getattr(sel.boundary, "massless_ghosts", False))
         self.models = sel.models()
-        self.terms = T.order(T.collect(self.models))
+        self.terms = T.order(T.collect(self.models, sel.dim))
+        for t in self.terms:
+            if sel.dim not in t.dims:
+                raise T.ContractError(f"{t.owner.family} {t.owner.name!r} has no {sel.dim}-D "
+                                      f"form (term {t.name!r} has code for "
+                                      f"{', '.join(f'{d}-D' for d in t.dims) or 'no dimension'})")
         self.kinds, self.viscous_dry_walls = self._kinds()
         self.fields = []
         for m in self.models:

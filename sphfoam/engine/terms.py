@@ -22,8 +22,12 @@ nothing provides, naming the models involved.
 Vector components. A line containing ``@`` is written once per spatial component with ``@``
 replaced by ``x``, ``y`` (and ``z`` in three dimensions), and ``U@`` by the velocity
 component ``u``, ``v`` (``w``): ``acc_@ -= pterm * gW@`` is ``acc_x -= pterm * gWx`` and
-``acc_y -= pterm * gWy``. A backend for another dimension or device expands the same text
-with its own components (see docs/developing.md).
+``acc_y -= pterm * gWy``. Reductions: ``dot(A@, B@)`` is ``(A_x * B_x + A_y * B_y [+ A_z *
+B_z])`` and ``sum@(E@)`` is ``(E_x + E_y [+ E_z])``; a line whose only ``@`` are inside them
+is written once. A term whose algebra is per dimension gives its code per dimension
+(``pair={2: "...", 3: "..."}``) or says ``dims=(2,)``; the plan refuses it in any other
+dimension. A backend for another dimension or device expands the same text with its own
+components (see docs/developing.md).
 """
 
 from __future__ import annotations
@@ -66,9 +70,9 @@ PARTICLE_KINDS = ("fluid", "wall", "wetWall", "all")
 #: eta2, gravity), with the names they have in the code
 QUANTITIES = {
     "W": "Wab, the kernel value W(r_ab, h)",
-    "gradW": "gWx, gWy: grad_a W_ab",
-    "uc": "uc_ab, vc_ab: the velocity difference the continuity equation uses",
-    "acc": "acc_x, acc_y: dv_a/dt (accumulated)",
+    "gradW": "gWx, gWy (gWz): grad_a W_ab",
+    "uc": "uc_ab, vc_ab (wc_ab): the velocity difference the continuity equation uses",
+    "acc": "acc_x, acc_y (acc_z): dv_a/dt (accumulated)",
     "drho": "drho_a: drho_a/dt (accumulated)",
     "rho_new": "rho_new: the filtered density of a (filter stage)",
     "rho": "rho[a]: the density of a, set in place (step stage)",
@@ -148,10 +152,24 @@ class Term:
     #: once (e.g. a pressure gradient and a viscous term along grad W: one product per
     #: component and side instead of one per term)
     force: str = ""
+    #: the dimensions the term has code for: those every per-dimension code field
+    #: (``{2: "...", 3: "..."}``) names, (2, 3) where every code field is a plain string
+    #: (written once with ``@``, ``dot``, ``sum@``). A plan of another dimension refuses it
+    dims: tuple[int, ...] = ()
     #: the model that contributed it (set by :func:`collect`)
     owner: object = field(default=None, compare=False)
 
     def __post_init__(self):
+        dims = {2, 3}
+        for part in CODE_PARTS:
+            code = getattr(self, part)
+            if isinstance(code, dict):
+                code = tuple(sorted(code.items()))
+                object.__setattr__(self, part, code)
+            if isinstance(code, tuple):
+                dims &= {d for d, _ in code}
+        if not self.dims:
+            object.__setattr__(self, "dims", tuple(sorted(dims)))
         if self.force:
             f = f"f_{self.name}"
             pair = f"{f} = {self.force}\nacc_@ -= mb * {f} * gW@"
@@ -161,6 +179,13 @@ class Term:
                                     "code are written from its force; give neither")
             object.__setattr__(self, "pair", pair)
             object.__setattr__(self, "reaction", reaction)
+
+    def code(self, part: str, dim: int = 2) -> str:
+        """The ``part`` code (``pair``, ``init``, ``final``, ``reaction``, ``force``) of
+        the ``dim``-dimensional form: a plain string, or the entry of ``dim`` of a code given
+        per dimension ("" where it has none: the plan refuses such a term in ``dim``)."""
+        code = getattr(self, part)
+        return dict(code).get(dim, "") if isinstance(code, tuple) else code
 
     @property
     def on_demand(self) -> bool:
@@ -173,24 +198,121 @@ class Term:
         return f"{o.family} {o.name!r} (term {self.name!r})" if o is not None else self.name
 
 
+#: the code fields of a :class:`Term`, each a string or a mapping {dimension: string}
+CODE_PARTS = ("pair", "init", "final", "reaction")
+
+
 class ContractError(ValueError):
     """A selection whose terms do not fit together (raised before anything compiles)."""
 
 
+_REDUCTION = re.compile(r"(?<![\w.])(dot|sum@)\(")
+_ATOM = re.compile(r"^(?:[A-Za-z_]\w*(?:\[[^\[\]]*\])?|\d+(?:\.\d*)?(?:e[-+]?\d+)?)$")
+
+
+def _close(text: str, start: int) -> int:
+    """The index of the parenthesis closing the one opened just before ``start``."""
+    depth = 1
+    for i in range(start, len(text)):
+        if text[i] in "([{":
+            depth += 1
+        elif text[i] in ")]}":
+            depth -= 1
+            if depth == 0:
+                return i
+    raise ContractError(f"unbalanced parentheses in {text!r}")
+
+
+def _top_level(text: str) -> list[str]:
+    """``text`` split at its commas outside parentheses and brackets."""
+    parts, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append(text[start:i])
+            start = i + 1
+    return [p.strip() for p in parts + [text[start:]]]
+
+
+def _product(text: str) -> bool:
+    """Whether ``text`` is a product of factors (no operator binding looser than ``*``, ``/``
+    outside parentheses): such a term of a sum needs no parentheses of its own."""
+    depth = 0
+    for i, ch in enumerate(text):
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif depth == 0 and (ch in "+-<>=!,%" or (ch == " " and re.match(
+                r" (if|else|and|or|not|for|in) ", text[i:]))):
+            return False
+    return True
+
+
+def _component(text: str, axis: str, vel: str) -> str:
+    return text.replace("U@", vel).replace("@", axis)
+
+
+def _reductions(line: str, dims) -> str:
+    """``dot(A, B)`` and ``sum@(E)`` of ``line`` written out over the components."""
+    while True:
+        m = _REDUCTION.search(line)
+        if m is None:
+            return line
+        end = _close(line, m.end())
+        inner = _reductions(line[m.end():end], dims)
+        if m.group(1) == "dot":
+            args = _top_level(inner)
+            if len(args) != 2:
+                raise ContractError(f"dot takes two vectors: {line!r}")
+            a, b = (x if _ATOM.match(_component(x, "x", "u")) else f"({x})" for x in args)
+            out = " + ".join(f"{_component(a, ax, v)} * {_component(b, ax, v)}"
+                             for ax, v in dims)
+        else:
+            e = inner.strip()
+            e = e if _product(e) else f"({e})"
+            out = " + ".join(_component(e, ax, v) for ax, v in dims)
+        line = f"{line[:m.start()]}({out}){line[end + 1:]}"
+
+
 def expand_components(code: str, dims=(("x", "u"), ("y", "v"))) -> str:
-    """Write every line holding ``@`` once per component (see the module docstring)."""
+    """Write every line holding ``@`` once per component, after writing out its reductions
+    ``dot(A@, B@)`` (A_x * B_x + A_y * B_y ...) and ``sum@(E@)`` (E_x + E_y ...); a line
+    whose only ``@`` are in reductions is written once (see the module docstring)."""
     out = []
     for line in textwrap.dedent(code).strip("\n").splitlines():
         if "@" not in line:
             out.append(line)
             continue
+        line = _reductions(line, dims)
+        if "@" not in line:
+            out.append(line)
+            continue
         for axis, vel in dims:
-            out.append(line.replace("U@", vel).replace("@", axis))
+            out.append(_component(line, axis, vel))
     return "\n".join(out)
 
 
-def collect(models) -> list[Term]:
-    """Every term of the selected models, in selection order, with its owner."""
+#: (axis, velocity) of each component, x, y, z
+AXES = (("x", "u"), ("y", "v"), ("z", "w"))
+
+
+def expand_names(names: tuple[str, ...], dim: int = 2) -> tuple[str, ...]:
+    """Declared names (``reads``, ``writes``, ``corrects``, ``sums``) with each one holding
+    ``@`` written once per component: ``aux.xsph_dU@`` is ``aux.xsph_du``, ``aux.xsph_dv``."""
+    out = []
+    for n in names:
+        out += [n.replace("U@", v).replace("@", ax) for ax, v in AXES[:dim]] if "@" in n \
+            else [n]
+    return tuple(out)
+
+
+def collect(models, dim: int = 2) -> list[Term]:
+    """Every term of the selected models, in selection order, with its owner and its declared
+    names written out for ``dim`` dimensions (see :func:`expand_names`)."""
     terms = []
     for m in models:
         for t in m.terms():
@@ -203,7 +325,9 @@ def collect(models) -> list[Term]:
                     + "; ".join(f"{what} {vals}" for what, vals in
                                 (("stage", unknown), ("neighbour kind", bad_sees),
                                  ("particle kind", bad_applies)) if vals))
-            terms.append(replace(t, owner=m))
+            terms.append(replace(t, owner=m, **{
+                k: expand_names(getattr(t, k), dim)
+                for k in ("reads", "writes", "corrects", "sums")}))
     return terms
 
 
@@ -248,7 +372,9 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
                                 "own to mirror")
         for name in t.sums:
             if "prepass" not in t.stages or \
-                    not re.search(rf"(?m)^{re.escape(name)} = 0\.0$", t.init):
+                    not all(re.search(rf"(?m)^{re.escape(name)} = 0\.0$",
+                                      expand_components(t.code("init", d), AXES[:d]))
+                            for d in t.dims):
                 raise ContractError(f"{t.who()} declares the sum {name!r}: only a prepass term "
                                     f"whose init sets it ('{name} = 0.0') may")
     pre = [t for t in terms if "prepass" in t.stages and not t.on_demand]
@@ -263,7 +389,9 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
             if not t.on_demand or t.reads:
                 raise ContractError(f"{t.who()} caches {name!r} but is not a definer of pair "
                                     "quantities from the geometry alone (on demand, no reads)")
-            if not re.search(rf"(?m)^{re.escape(name)} = ", t.pair):
+            if not all(re.search(rf"(?m)^{re.escape(name)} = ",
+                                 expand_components(t.code("pair", d), AXES[:d]))
+                       for d in t.dims):
                 raise ContractError(f"{t.who()} caches {name!r}, which its pair code does not "
                                     f"define on a line of its own ('{name} = ...')")
     for t in terms:

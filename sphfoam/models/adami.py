@@ -38,46 +38,38 @@ from sphfoam.registry import Coeffs, register
 _INIT = """\
 bnd_sw = 0.0
 bnd_sp = 0.0
-bnd_su = 0.0
-bnd_sv = 0.0
+bnd_sU@ = 0.0
 """
 
 #: over fluid neighbours f of wall particle a: AHA12 eq. (27) with a_w = 0 and the Shepard sums
 _PAIR = """\
 bnd_sw += Wab
-bnd_sp += (pb + rhob * (gx * dx_ab + gy * dy_ab)) * Wab
-bnd_su += (ua - u_ab) * Wab
-bnd_sv += (va - v_ab) * Wab
+bnd_sp += (pb + rhob * dot(g@, d@_ab)) * Wab
+bnd_sU@ += (U@a - U@_ab) * Wab
 """
 
 _FINAL = """\
 if bnd_sw > 0.0:
     bnd_pw = bnd_sp / bnd_sw
-    bnd_uf = bnd_su / bnd_sw
-    bnd_vf = bnd_sv / bnd_sw
+    bnd_U@f = bnd_sU@ / bnd_sw
 else:
     bnd_pw = 0.0
-    bnd_uf = ua
-    bnd_vf = va
+    bnd_U@f = U@a
 p[a] = bnd_pw
 rho[a] = eos_rho0 * max(1.0 + bnd_pw / eos_B, 1e-6) ** (1.0 / eos_gamma)
 """
 
 _NO_SLIP = """\
-u[a] = 2.0 * ua - bnd_uf
-v[a] = 2.0 * va - bnd_vf
+U@[a] = 2.0 * U@a - bnd_U@f
 """
 
 _FREE_SLIP = """\
 if fld[F_corner, a] > 0.5:
-    u[a] = 2.0 * ua - bnd_uf
-    v[a] = 2.0 * va - bnd_vf
+    U@[a] = 2.0 * U@a - bnd_U@f
 else:
-    bnd_nx = fld[F_nx, a]
-    bnd_ny = fld[F_ny, a]
-    bnd_dn = (ua - bnd_uf) * bnd_nx + (va - bnd_vf) * bnd_ny
-    u[a] = bnd_uf + 2.0 * bnd_dn * bnd_nx
-    v[a] = bnd_vf + 2.0 * bnd_dn * bnd_ny
+    bnd_n@ = fld[F_n@, a]
+    bnd_dn = dot(U@a - bnd_U@f, bnd_n@)
+    U@[a] = bnd_U@f + 2.0 * bnd_dn * bnd_n@
 """
 
 
@@ -109,7 +101,8 @@ class Adami(Boundary):
                                                     "field.corner")
         return [Term("wallState", ("prepass",), init=_INIT, pair=_PAIR, final=_FINAL + slip,
                      applies=("wall",), sees=("fluid",), reads=reads,
-                     writes=("rho", "u"), corrects=("p",), weighted=False)]
+                     writes=("rho", "u"), corrects=("p",), weighted=False,
+                     dims=(2, 3) if self.coeffs.noSlip else (2,))]   # (2-D wall normals)
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
     def attach(self, run):

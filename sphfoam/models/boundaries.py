@@ -84,16 +84,14 @@ class _NoSlip(Coeffs):
 #: wall normal of neighbour b and the normal / tangential distances of a from it; a corner
 #: particle repels radially (its normal is the direction b -> a and chi = 1)
 _GEOMETRY = """\
-bnx = fld[F_nx, b]
-bny = fld[F_ny, b]
+bn@ = fld[F_n@, b]
 if fld[F_corner, b] > 0.5:
     rab = math.sqrt(r2)
-    bnx = dx_ab / rab
-    bny = dy_ab / rab
+    bn@ = d@_ab / rab
     yn = rab
     chi = 1.0
 else:
-    yn = dx_ab * bnx + dy_ab * bny
+    yn = dot(d@_ab, bn@)
     xt = abs(dy_ab * bnx - dx_ab * bny)
     chi = 1.0 - xt / bnd_dx if xt < bnd_dx else 0.0
 """
@@ -105,13 +103,12 @@ else:
 _MONAGHAN_KOS = _GEOMETRY + """\
 if chi > 0.0 and yn < bnd_range:
     qn = max(yn, bnd_ymin) / bnd_range
-    vn = -(u_ab * bnx + v_ab * bny)
+    vn = -dot(U@_ab, bn@)
     amk = bnd_a0
     if vn > 0.0:
         amk += bnd_c0 * vn * inv_h
     gam = amk * (1.0 - qn) / math.sqrt(qn) * chi
-    acc_x += gam * bnx
-    acc_y += gam * bny
+    acc_@ += gam * bn@
 """
 
 #: Monaghan et al. (2003), T(3.73)-(3.76): f_ab = m_b/(m_a + m_b) Gamma(y) chi(x) n_b,
@@ -129,13 +126,14 @@ if chi > 0.0 and yn < 2.0 * h:
         gam = 0.5 * bet * (2.0 - qn) * (2.0 - qn)
     ma = m[a]
     gam *= mb / (ma + mb) * chi
-    acc_x += gam * bnx
-    acc_y += gam * bny
+    acc_@ += gam * bn@
 """
 
 
 #: the wall fields the repulsive forces read
 _GEOMETRY_READS = ("field.nx", "field.ny", "field.corner")
+#: the wall geometry (normal, tangential distance) is written for 2-D walls only
+_GEOMETRY_DIMS = (2,)
 
 
 class _Repulsive(Boundary):
@@ -152,7 +150,8 @@ class _Repulsive(Boundary):
 
     def terms(self):
         return [Term("wallForce", ("rates",), pair=self.force_code, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False,
+                     dims=_GEOMETRY_DIMS)]
 
 
 @register
@@ -471,4 +470,5 @@ else:
                      init="bnd_count = 0", pair="bnd_count += 1", final=self._STEP_FINAL,
                      reads=("field.nFull",), writes=("aux.bnd_wet", "rho"), weighted=False),
                 Term("wallForce", ("rates",), pair=_MONAGHAN_KOS, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False,
+                     dims=_GEOMETRY_DIMS)]

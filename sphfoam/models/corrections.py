@@ -83,7 +83,7 @@ class XSPH(VelocityCorrection):
     name = "xsph"
     doc = ("XSPH: positions and continuity use v_a + eps sum_b m_b/rhobar_ab v_ba W_ab, "
            "T(3.62)-(3.63), P(36)")
-    _DV = ("aux.xsph_du", "aux.xsph_dv")
+    _DV = ("aux.xsph_dU@",)
 
     class Coeffs(Coeffs):
         epsilon: float = Field(0.5, gt=0.0, le=1.0, description=(
@@ -94,31 +94,25 @@ class XSPH(VelocityCorrection):
             "step instead of three with monaghan2007; the scheme changes at O(dt))"))
 
     _INIT = """\
-xsph_su = 0.0
-xsph_sv = 0.0
+xsph_sU@ = 0.0
 """
     _PAIR = """\
 xsph_w = 2.0 * mb / (rhoa + rhob) * Wab
-xsph_su -= xsph_w * u_ab
-xsph_sv -= xsph_w * v_ab
+xsph_sU@ -= xsph_w * U@_ab
 """
     #: b's sums for the pair (b, a): m_a W_ba / rhobar (v_a - v_b), v_a - v_b = v_ab
     _REACTION = """\
 xsph_w_b = 2.0 * ma / (rhoa + rhob) * Wab
-xsph_su_b += xsph_w_b * u_ab
-xsph_sv_b += xsph_w_b * v_ab
+xsph_sU@_b += xsph_w_b * U@_ab
 """
     _FINAL = """\
 if kind[a] == FLUID:
-    aux[I_xsph_du, a] = vc_eps * xsph_su
-    aux[I_xsph_dv, a] = vc_eps * xsph_sv
+    aux[I_xsph_dU@, a] = vc_eps * xsph_sU@
 else:
-    aux[I_xsph_du, a] = 0.0
-    aux[I_xsph_dv, a] = 0.0
+    aux[I_xsph_dU@, a] = 0.0
 """
     _UC = """\
-uc_ab = u_ab + aux[I_xsph_du, a] - aux[I_xsph_du, b]
-vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
+U@c_ab = U@_ab + aux[I_xsph_dU@, a] - aux[I_xsph_dU@, b]
 """
 
     def params(self, ctx: CaseContext):
@@ -127,7 +121,7 @@ vc_ab = v_ab + aux[I_xsph_dv, a] - aux[I_xsph_dv, b]
     def terms(self):
         return [Term("xsphVelocity", ("prepass",), init=self._INIT, pair=self._PAIR,
                      final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
-                     writes=self._DV, reaction=self._REACTION, sums=("xsph_su", "xsph_sv"),
+                     writes=self._DV, reaction=self._REACTION, sums=("xsph_sU@",),
                      per_step=self.coeffs.evaluation == "oncePerStep",
                      nonfluid_discarded=True),                  # walls: dv = 0
                 Term("xsphContinuity", ("rates", "density"), pair=self._UC,
@@ -294,9 +288,9 @@ gWy *= 0.5
         grad = self._GRADIENT_SYMMETRIC if self.coeffs.symmetric else self._GRADIENT_A
         return [Term("momentMatrix", ("prepass",), init=self._INIT, pair=self._PAIR,
                      final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
-                     writes=self._B),
+                     writes=self._B, dims=(2,)),
                 Term("correctedGradient", ("rates", "density"), pair=grad, applies=("all",),
-                     reads=("W", *self._B), corrects=("gradW",))]
+                     reads=("W", *self._B), corrects=("gradW",), dims=(2,))]
 
     def params(self, ctx: CaseContext):
         return {"kc_detmin": self.coeffs.minDetRatio}

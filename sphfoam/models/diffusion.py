@@ -141,7 +141,7 @@ else:
 """
     # psi_ab . grad_a W_ab with r_ba = -r_ab: 2 (rho_a - rho_b) r_ab.gradW / r^2 - (G_a+G_b).gradW
     _DIFFUSION = """\
-filt_psi = 2.0 * (rhoa - rhob) * (dx_ab * gWx + dy_ab * gWy) / r2 \\
+filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / r2 \\
     - (aux[I_rgrad_x, a] + aux[I_rgrad_x, b]) * gWx \\
     - (aux[I_rgrad_y, a] + aux[I_rgrad_y, b]) * gWy
 drho_a += filt_dc0 * h * filt_psi * mb / rhob
@@ -154,9 +154,9 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
     def terms(self):
         return [Term("renormalisedDensityGradient", ("prepass",), init=self._INIT,
                      pair=self._PAIR, final=self._FINAL, applies=("all",), sees=("all",),
-                     reads=("gradW",), writes=self._G),
+                     reads=("gradW",), writes=self._G, dims=(2,)),
                 Term("densityDiffusion", ("rates", "density"), pair=self._DIFFUSION,
-                     reads=("gradW", *self._G), writes=("drho",))]
+                     reads=("gradW", *self._G), writes=("drho",), dims=(2,))]
 
 
 @register
@@ -200,18 +200,18 @@ class FourtakasDeltaSPH(DensityFilter):
             "(antisymmetric, conserves mass); particle: the paper's form with a as reference"))
 
     _MIDPOINT = """\
-filt_x = filt_rho0_cb * (gx * dx_ab + gy * dy_ab)
+filt_x = filt_rho0_cb * dot(g@, d@_ab)
 filt_dh = filt_rho0 * hydrostatic_midpoint(0.5 * filt_x, filt_ig, filt_s1, filt_s3, filt_s5,
                                            filt_s7, filt_s9, filt_s11)
-filt_psi = 2.0 * (rhoa - rhob - filt_dh) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)
+filt_psi = 2.0 * (rhoa - rhob - filt_dh) * dot(d@_ab, gW@) / (r2 + eta2)
 drho_a += filt_dc0 * h * filt_psi * mb / rhob
 """
     _PARTICLE = """\
-filt_x = filt_rho0_cb * (gx * dx_ab + gy * dy_ab)
+filt_x = filt_rho0_cb * dot(g@, d@_ab)
 filt_dh = filt_rho0 * hydrostatic_particle(filt_x, filt_ig, filt_d1, filt_d2, filt_d3, filt_d4,
                                            filt_d5, filt_d6, filt_d7, filt_d8, filt_d9,
                                            filt_d10, filt_d11, filt_d12)
-filt_psi = 2.0 * (rhoa - rhob - filt_dh) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)
+filt_psi = 2.0 * (rhoa - rhob - filt_dh) * dot(d@_ab, gW@) / (r2 + eta2)
 drho_a += filt_dc0 * h * filt_psi * mb / rhob
 """
 
@@ -234,10 +234,10 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
     #: the midpoint form's term for the pair (b, a): rho^H is odd in r_ab and
     #: r_ba . grad_b W_ba = r_ab . grad_a W_ab, so psi_ba = -psi_ab (half lists)
     _MIDPOINT_REACTION = """\
-filt_x_b = filt_rho0_cb * (gx * dx_ab + gy * dy_ab)
+filt_x_b = filt_rho0_cb * dot(g@, d@_ab)
 filt_dh_b = filt_rho0 * hydrostatic_midpoint(0.5 * filt_x_b, filt_ig, filt_s1, filt_s3,
                                              filt_s5, filt_s7, filt_s9, filt_s11)
-filt_psi_b = 2.0 * (rhoa - rhob - filt_dh_b) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)
+filt_psi_b = 2.0 * (rhoa - rhob - filt_dh_b) * dot(d@_ab, gW@) / (r2 + eta2)
 drho_b -= filt_dc0 * h * filt_psi_b * ma / rhoa
 """
 

@@ -30,16 +30,16 @@ class Continuity(PipelineModel):
 class DifferenceForm(Continuity):
     name = "differenceForm"
     doc = "drho_a/dt = sum_b m_b v_ab . grad_a W_ab, T(3.18)"
-    drho_code = "drho_a += mb * (uc_ab * gWx + vc_ab * gWy)"
-    reaction_code = "drho_b += ma * (uc_ab * gWx + vc_ab * gWy)"
+    drho_code = "drho_a += mb * dot(U@c_ab, gW@)"
+    reaction_code = "drho_b += ma * dot(U@c_ab, gW@)"
 
 
 @register
 class DensityWeighted(Continuity):
     name = "densityWeighted"
     doc = "drho_a/dt = rho_a sum_b (m_b / rho_b) v_ab . grad_a W_ab, T(3.17)"
-    drho_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
-    reaction_code = "drho_b += rhob * ma / rhoa * (uc_ab * gWx + vc_ab * gWy)"
+    drho_code = "drho_a += rhoa * mb / rhob * dot(U@c_ab, gW@)"
+    reaction_code = "drho_b += rhob * ma / rhoa * dot(U@c_ab, gW@)"
 
 
 class Momentum(PipelineModel):

@@ -32,13 +32,15 @@ class DensityFilter(PipelineModel):
     filter_init: str = ""
     filter_pair: str = ""
     filter_final: str = ""
+    #: the dimensions the pass has code for
+    filter_dims: tuple[int, ...] = (2, 3)
 
     def terms(self):
         if not self.filter_pair:
             return []
         return [Term("densityFilter", ("filter",), init=self.filter_init,
                      pair=self.filter_pair, final=self.filter_final, sees=("all",),
-                     reads=("W",), writes=("rho_new",))]
+                     reads=("W",), writes=("rho_new",), dims=self.filter_dims)]
 
     def schedule(self):
         """The periodic pass runs before the steps whose index is a multiple of ``every``."""
@@ -112,6 +114,8 @@ class MLSReinitialisation(DensityFilter):
     def params(self, ctx: CaseContext):
         return {"filt_min_det": self.coeffs.minDetRatio}
 
+    #: the moment matrix of the linear basis (1, x, y): 2-D
+    filter_dims = (2,)
     filter_init = _SELF + (
         "filt_va = m[a] / rhoa * filt_w0\n"
         "filt_a00 = filt_va\n"          # the self term: x_aa = y_aa = 0
@@ -181,6 +185,6 @@ class DeltaSPH(DensityFilter):
     def terms(self):
         return [Term("densityDiffusion", ("rates", "density"), reads=("gradW",),
                      writes=("drho",), pair=(
-                         "filt_psi = 2.0 * (rhoa - rhob) * (dx_ab * gWx + dy_ab * gWy) / "
+                         "filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / "
                          "(r2 + eta2)\n"
                          "drho_a += filt_dc0 * h * filt_psi * mb / rhob\n"))]

@@ -1,7 +1,9 @@
-"""Smoothing kernels in two dimensions, W(r, h) = alpha_d / h^2 * f(q), q = |r| / h.
+"""Smoothing kernels, W(r, h) = alpha_d / h^d * f(q), q = |r| / h, in d = 2 or 3 dimensions.
 
 Each kernel provides ``f(q)`` and ``df/dq / q`` as jitted functions (the second is finite at
-q = 0 for all of them, so grad W = alpha_d / h^4 * (df/dq / q) * r_ab needs no division by r).
+q = 0 for all of them, so grad W = alpha_d / h^(d+2) * (df/dq / q) * r_ab needs no division
+by r), and its normalisation in each dimension, T(3.4): alpha_2 = 1 / (2 pi int_0^kappa f q dq),
+alpha_3 = 1 / (4 pi int_0^kappa f q^2 dq).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ _JIT = dict(cache=True, fastmath=set(FASTMATH), inline="always")
 
 
 # --- cubic spline, Monaghan & Lattanzio (1985), T(3.5), alpha_2 = 15 / (7 pi) -------------
+# (f(0) = 2/3: alpha_3 = 3 / (2 pi), the 1 / pi of the form with f(0) = 1)
 @njit(**_JIT)
 def cubic_spline_f(q):
     t2 = max(2.0 - q, 0.0)
@@ -36,7 +39,7 @@ def cubic_spline_dfdq_q(q):
     return -0.5 * t2 * t2 / q
 
 
-# --- quintic spline, Morris et al. (1997), T(3.6), alpha_2 = 7 / (478 pi) -----------------
+# --- quintic spline, Morris et al. (1997), T(3.6), alpha_2 = 7 / (478 pi), alpha_3 = 1 / (120 pi)
 @njit(**_JIT)
 def quintic_f(q):
     t3 = max(3.0 - q, 0.0)
@@ -55,7 +58,7 @@ def quintic_dfdq_q(q):
     return (-5.0 * t3**4 + 30.0 * t2**4) / q
 
 
-# --- quartic spline, Violeau & Issa (2007), T(3.7), alpha_2 = 96 / (1199 pi) --------------
+# --- quartic spline, Violeau & Issa (2007), T(3.7), alpha_2 = 96 / (1199 pi), alpha_3 = 1 / (20 pi)
 @njit(**_JIT)
 def quartic_f(q):
     t5 = max(2.5 - q, 0.0)
@@ -74,7 +77,7 @@ def quartic_dfdq_q(q):
     return (-4.0 * t5**3 + 20.0 * t3**3) / q
 
 
-# --- Wendland C2 (1995) in 2-D, alpha_2 = 7 / (4 pi), support 2h --------------------------
+# --- Wendland C2 (1995), alpha_2 = 7 / (4 pi), alpha_3 = 21 / (16 pi), support 2h ---------
 @njit(**_JIT)
 def wendland_c2_f(q):
     t = max(1.0 - 0.5 * q, 0.0)
@@ -161,7 +164,8 @@ class Kernel(PipelineModel):
     family = "kernel"
     prefix = "kern_"
     support: float      # kappa: W = 0 for q >= kappa
-    alpha_2d: float     # normalisation in 2-D
+    alpha_2d: float     # normalisation in 2-D, 1 / (2 pi int f q dq)
+    alpha_3d: float     # normalisation in 3-D, 1 / (4 pi int f q^2 dq)
     f_name: str
     dfdq_q_name: str
 
@@ -188,9 +192,16 @@ class Kernel(PipelineModel):
         return [f"from sphfoam.models.kernels import {self.f_name} as kernel_f, "
                 f"{self.dfdq_q_name} as kernel_dfdq_q"]
 
+    def alpha(self, dim: int = 2) -> float:
+        """alpha_d, the normalisation in ``dim`` dimensions."""
+        if dim not in (2, 3):
+            raise ValueError(f"dimension {dim}: valid are 2, 3")
+        return self.alpha_2d if dim == 2 else self.alpha_3d
+
     def params(self, ctx: CaseContext):
-        h = ctx.h
-        return {"kern_w": self.alpha_2d / h**2, "kern_gw": self.alpha_2d / h**4}
+        h, dim = ctx.h, ctx.dim
+        alpha = self.alpha(dim)
+        return {"kern_w": alpha / h**dim, "kern_gw": alpha / h**(dim + 2)}
 
     #: the pair code of W_ab and of the gradient factor fw (a kernel of q^2 alone passes
     #: r^2 / h^2 instead of q = |r| / h and saves the square root)
@@ -213,12 +224,10 @@ class Kernel(PipelineModel):
         """kappa h: W = 0 beyond it."""
         return self.support * h
 
-    def W(self, r, h):
+    def W(self, r, h, dim: int = 2):
         """Kernel value for a numpy/scalar distance (tests and post-processing)."""
-        import numpy as np
-
         q = np.asarray(r, dtype=float) / h
-        return self.alpha_2d / h**2 * np.vectorize(self.f_jit)(q)
+        return self.alpha(dim) / h**dim * np.vectorize(self.f_jit)(q)
 
 
 @register
@@ -227,6 +236,7 @@ class CubicSpline(Kernel):
     doc = "cubic B-spline, Monaghan & Lattanzio (1985), T(3.5); support 2h"
     support = 2.0
     alpha_2d = 15.0 / (7.0 * math.pi)
+    alpha_3d = 3.0 / (2.0 * math.pi)
     f_name, dfdq_q_name = "cubic_spline_f", "cubic_spline_dfdq_q"
 
 
@@ -236,6 +246,7 @@ class Quartic(Kernel):
     doc = "quartic spline, Violeau & Issa (2007), T(3.7); support 2.5h"
     support = 2.5
     alpha_2d = 96.0 / (1199.0 * math.pi)
+    alpha_3d = 1.0 / (20.0 * math.pi)
     f_name, dfdq_q_name = "quartic_f", "quartic_dfdq_q"
 
 
@@ -245,6 +256,7 @@ class Quintic(Kernel):
     doc = "quintic spline, Morris et al. (1997), T(3.6); support 3h"
     support = 3.0
     alpha_2d = 7.0 / (478.0 * math.pi)
+    alpha_3d = 1.0 / (120.0 * math.pi)
     f_name, dfdq_q_name = "quintic_f", "quintic_dfdq_q"
 
 
@@ -255,13 +267,17 @@ class Gaussian(Kernel):
     W = C / h^2 [exp(-q^2) - exp(-Q^2)] for q < Q = R / h = 3, 0 beyond; the shift makes W
     continuous (not its slope, -2 Q exp(-Q^2) ~ -7e-4 at q = Q).  P(28) normalises it:
     C = 1 / (2 pi int_0^Q [exp(-q^2) - exp(-Q^2)] q dq) = 1 / (pi (1 - (1 + Q^2) exp(-Q^2))),
-    = 1.0012356234 / pi for Q = 3 as the paper states.
+    = 1.0012356234 / pi for Q = 3 as the paper states. Truncated and shifted the same way in
+    3-D: C_3 = 1 / (4 pi int_0^Q [exp(-q^2) - exp(-Q^2)] q^2 dq)
+    = 1 / (pi^(3/2) erf(Q) - 2 pi Q exp(-Q^2) - 4/3 pi Q^3 exp(-Q^2)).
     """
 
     name = "gaussian"
     doc = "finite-support Gaussian, Colagrossi & Landrini (2003), P(26)-(28); support 3h"
     support = GAUSSIAN_Q
     alpha_2d = 1.0 / (math.pi * (1.0 - (1.0 + GAUSSIAN_Q**2) * GAUSSIAN_EXP_Q2))
+    alpha_3d = 1.0 / (math.pi**1.5 * math.erf(GAUSSIAN_Q) - math.pi * GAUSSIAN_EXP_Q2
+                      * (2.0 * GAUSSIAN_Q + 4.0 / 3.0 * GAUSSIAN_Q**3))
     f_name, dfdq_q_name = "gaussian_f", "gaussian_dfdq_q"
 
     # a function of q^2 alone: the pair loops give it r^2 / h^2 and need no square root
@@ -282,4 +298,5 @@ class WendlandC2(Kernel):
     doc = "Wendland C2 (1995), the default of modern SPH codes; support 2h"
     support = 2.0
     alpha_2d = 7.0 / (4.0 * math.pi)
+    alpha_3d = 21.0 / (16.0 * math.pi)
     f_name, dfdq_q_name = "wendland_c2_f", "wendland_c2_dfdq_q"

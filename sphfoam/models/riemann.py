@@ -64,15 +64,15 @@ class RiemannContinuity(Continuity):
     name = "riemann"
     doc = ("drho_a/dt = 2 rho_a sum_b m_b/rho_b (v_a - v*) . grad_a W_ab with U* of the "
            "linearised Riemann solver, Zhang, Hu & Adams (2017, JCP 335)")
-    drho_code = "drho_a += rhoa * mb / rhob * (uc_ab * gWx + vc_ab * gWy)"
+    drho_code = "drho_a += rhoa * mb / rhob * dot(U@c_ab, gW@)"
     #: -2 rho_a m_b/rho_b (U* - (U_L + U_R)/2) e_ab . grad_a W_ab, e_ab = -r_ab / |r_ab|
     dissipation_code = _PAIR_STATE + """\
 if kindb == FLUID:
     rs_dp = pa - pb
 else:
-    rs_dp = rhoa * (gx * dx_ab + gy * dy_ab)      # p_a - p_R
+    rs_dp = rhoa * dot(g@, d@_ab)      # p_a - p_R
 rs_ds = rs_dp / (rs_rho * rs_c * rs_r)
-drho_a += rhoa * mb / rhob * rs_ds * (dx_ab * gWx + dy_ab * gWy)"""
+drho_a += rhoa * mb / rhob * rs_ds * dot(d@_ab, gW@)"""
 
     def terms(self):
         return [*super().terms(),

@@ -108,8 +108,8 @@ class ParticleShifting(PipelineModel):
 
     family = "particleShifting"
     prefix = "shift_"
-    _SURF = ("aux.shift_lambda", "aux.shift_nx", "aux.shift_ny")
-    _DU = ("aux.shift_du", "aux.shift_dv")
+    _SURF = ("aux.shift_lambda", "aux.shift_n@")
+    _DU = ("aux.shift_dU@",)
     _COEF: str
 
     _DETECT_INIT = """\
@@ -117,8 +117,7 @@ shift_mxx = 0.0
 shift_mxy = 0.0
 shift_myx = 0.0
 shift_myy = 0.0
-shift_gx = 0.0
-shift_gy = 0.0
+shift_g@ = 0.0
 """
     # M = sum_b grad_a W_ab (x) r_ba V_b with r_ba = -r_ab; nu = sum_b grad_a W_ab V_b
     _DETECT_PAIR = """\
@@ -127,8 +126,7 @@ shift_mxx -= gWx * dx_ab * shift_vb
 shift_mxy -= gWx * dy_ab * shift_vb
 shift_myx -= gWy * dx_ab * shift_vb
 shift_myy -= gWy * dy_ab * shift_vb
-shift_gx += gWx * shift_vb
-shift_gy += gWy * shift_vb
+shift_g@ += gW@ * shift_vb
 """
     _DETECT_FINAL = """\
 shift_sxy = 0.5 * (shift_mxy + shift_myx)
@@ -140,68 +138,56 @@ if abs(shift_det) > 1e-3 * abs(shift_mxx * shift_myy) and abs(shift_det) > 0.0:
     shift_nx = -(shift_myy * shift_gx - shift_mxy * shift_gy) / shift_det
     shift_ny = -(shift_mxx * shift_gy - shift_myx * shift_gx) / shift_det
 else:
-    shift_nx = -shift_gx
-    shift_ny = -shift_gy
-shift_nn = math.sqrt(shift_nx * shift_nx + shift_ny * shift_ny)
+    shift_n@ = -shift_g@
+shift_nn = math.sqrt(dot(shift_n@, shift_n@))
 if shift_nn > 0.0:
-    aux[I_shift_nx, a] = shift_nx / shift_nn
-    aux[I_shift_ny, a] = shift_ny / shift_nn
+    aux[I_shift_n@, a] = shift_n@ / shift_nn
 else:
-    aux[I_shift_nx, a] = 0.0
-    aux[I_shift_ny, a] = 0.0
+    aux[I_shift_n@, a] = 0.0
 """
     # shift_ns counts the fluid neighbours near the surface (a sum, so that the half-list
     # prepass can add b's count to it)
     _SHIFT_INIT = """\
-shift_cx = 0.0
-shift_cy = 0.0
+shift_c@ = 0.0
 shift_ns = 0.0
 shift_iwdx = 1.0 / (kern_w * kernel_f(shift_qdx))
 """
     _SHIFT_PAIR = """\
 shift_w = 1.0 + shift_r * (Wab * shift_iwdx) ** shift_n
 shift_vb = mb / rhob if kindb != WALL else shift_vw
-shift_cx += shift_w * gWx * shift_vb
-shift_cy += shift_w * gWy * shift_vb
+shift_c@ += shift_w * gW@ * shift_vb
 if kindb == FLUID and aux[I_shift_lambda, b] < shift_lam:
     shift_ns += 1.0
 """
     #: with ``surfaceR``: the plain gradient and the anti-clumping part summed apart, so that
     #: the final code weighs the latter with R or surfaceR by whether a is near the surface
     _SPLIT_INIT = """\
-shift_kx = 0.0
-shift_ky = 0.0
+shift_k@ = 0.0
 """
     _SPLIT_PAIR = """\
 shift_w = (Wab * shift_iwdx) ** shift_n
 shift_vb = mb / rhob if kindb != WALL else shift_vw
-shift_cx += gWx * shift_vb
-shift_cy += gWy * shift_vb
-shift_kx += shift_w * gWx * shift_vb
-shift_ky += shift_w * gWy * shift_vb
+shift_c@ += gW@ * shift_vb
+shift_k@ += shift_w * gW@ * shift_vb
 if kindb == FLUID and aux[I_shift_lambda, b] < shift_lam:
     shift_ns += 1.0
 """
     _SPLIT_REACTION = """\
 shift_va = ma / rhoa if kinda != WALL else shift_vw
-shift_cx_b -= gWx * shift_va
-shift_cy_b -= gWy * shift_va
-shift_kx_b -= shift_w * gWx * shift_va
-shift_ky_b -= shift_w * gWy * shift_va
+shift_c@_b -= gW@ * shift_va
+shift_k@_b -= shift_w * gW@ * shift_va
 if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
     shift_ns_b += 1.0
 """
     _SPLIT_FINAL = """\
 shift_ra = shift_rs if shift_near else shift_r
-shift_cx += shift_ra * shift_kx
-shift_cy += shift_ra * shift_ky
+shift_c@ += shift_ra * shift_k@
 """
     #: b's sums for the pair (b, a): grad_b W_ba = -gW@, V_a, and a near the surface (the
     #: anti-clumping factor shift_w is the pair's own, W_ba = W_ab)
     _SHIFT_REACTION = """\
 shift_va = ma / rhoa if kinda != WALL else shift_vw
-shift_cx_b -= shift_w * gWx * shift_va
-shift_cy_b -= shift_w * gWy * shift_va
+shift_c@_b -= shift_w * gW@ * shift_va
 if kinda == FLUID and aux[I_shift_lambda, a] < shift_lam:
     shift_ns_b += 1.0
 """
@@ -224,17 +210,15 @@ if kindb == FLUID:
     #: with correctDensity: grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid b
     #: (b's sum from the pair (b, a) has the same sign: ``_mirrored``)
     _GRADRHO_INIT = """\
-shift_grx = 0.0
-shift_gry = 0.0
+shift_gr@ = 0.0
 """
     _GRADRHO_PAIR = """\
 if kindb == FLUID:
-    shift_grx += (rhob - rhoa) * gWx * shift_vb
-    shift_gry += (rhob - rhoa) * gWy * shift_vb
+    shift_gr@ += (rhob - rhoa) * gW@ * shift_vb
 """
     _GRADRHO_FINAL = """\
 if kind[a] == FLUID:
-    aux[I_shift_drho, a] = aux[I_shift_du, a] * shift_grx + aux[I_shift_dv, a] * shift_gry
+    aux[I_shift_drho, a] = dot(aux[I_shift_dU@, a], shift_gr@)
 else:
     aux[I_shift_drho, a] = 0.0
 """
@@ -251,20 +235,15 @@ else:
 shift_near = shift_ns > 0.0 or aux[I_shift_lambda, a] < shift_lam
 {split}if kind[a] == FLUID:
 {coef}
-    shift_du = -shift_k * shift_cx
-    shift_dv = -shift_k * shift_cy
+    shift_dU@ = -shift_k * shift_c@
     if shift_near:
-        shift_dn = shift_du * aux[I_shift_nx, a] + shift_dv * aux[I_shift_ny, a]
-        shift_du -= shift_dn * aux[I_shift_nx, a]
-        shift_dv -= shift_dn * aux[I_shift_ny, a]
+        shift_dn = dot(shift_dU@, aux[I_shift_n@, a])
+        shift_dU@ -= shift_dn * aux[I_shift_n@, a]
     if shift_lamf > 0.0 and aux[I_shift_lambda, a] < shift_lamf:
-        shift_du = 0.0
-        shift_dv = 0.0
-    aux[I_shift_du, a] = shift_du
-    aux[I_shift_dv, a] = shift_dv
+        shift_dU@ = 0.0
+    aux[I_shift_dU@, a] = shift_dU@
 else:
-    aux[I_shift_du, a] = 0.0
-    aux[I_shift_dv, a] = 0.0
+    aux[I_shift_dU@, a] = 0.0
 """
 
     def imports(self):
@@ -292,7 +271,7 @@ else:
         if float(n).is_integer() and 1 <= n <= 16:
             pair = pair.replace("** shift_n", f"** {int(n)}")
         init, reaction, writes = self._SHIFT_INIT, self._SHIFT_REACTION, self._DU
-        sums = ("shift_cx", "shift_cy", "shift_ns")
+        sums = ("shift_c@", "shift_ns")
         if split:
             init += self._SPLIT_INIT
             reaction = self._SPLIT_REACTION
@@ -312,11 +291,11 @@ else:
                 sums += _sum_names(g_init)
         return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
                      pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
-                     reads=("gradW",), writes=self._SURF),
+                     reads=("gradW",), writes=self._SURF, dims=(2,)),
                 Term("shiftingVector", ("prepass",), init=init,
                      pair=pair, final=final, applies=("all",), sees=("all",),
                      reads=("W", "gradW", *self._SURF), writes=writes,
-                     reaction=reaction, sums=sums,
+                     reaction=reaction, sums=sums, dims=(2,),
                      nonfluid_discarded=True)]                   # walls are not shifted
 
     @property

@@ -135,7 +135,8 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
     def terms(self):
         pair = self._PAIR if self.wall_law == "none" else self._PAIR_WALL_LAW
         out = [velocity_gradient_term("sps", self._STRESS, self._TAU),
-               Term("spsStress", ("rates",), init=self._INIT, pair=pair, reads=("gradW", *self._TAU), writes=("acc",))]
+               Term("spsStress", ("rates",), init=self._INIT, pair=pair, reads=("gradW", *self._TAU), writes=("acc",),
+                    dims=(2,))]
         if self.wall_law != "none":
             out.append(wl.wall_law_term(self.wall_law))
         return out
@@ -296,7 +297,7 @@ if ml_det > 0.1:                                   # grad v = G L^-1 (exact for 
         out[0] = Term("mixingLengthGradient", ("prepass",), init=self._GRAD_INIT,
                       pair=self._GRAD_PAIR, final=self._GRAD_FINAL + self._STRESS,
                       applies=("all",), sees=("all",), reads=("gradW", "field.lineDist"),
-                      writes=self._TAU)
+                      writes=self._TAU, dims=(2,))
         return out
 
     def params(self, ctx):

@@ -91,10 +91,10 @@ class Laminar(Viscosity):
             return math.inf
         return 0.125 * ctx.h * ctx.h / ctx.nu
 
-    pair_code = ("lam = mb * visc_mu2 / (rhoa * rhob) * (dx_ab * gWx + dy_ab * gWy) / (r2 + eta2)\n"
+    pair_code = ("lam = mb * visc_mu2 / (rhoa * rhob) * dot(d@_ab, gW@) / (r2 + eta2)\n"
                  "acc_@ += lam * U@_ab")
     # r_ba . grad_b W_ba = r_ab . grad_a W_ab, v_ba = -v_ab
-    reaction_code = ("lam_b = ma * visc_mu2 / (rhob * rhoa) * (dx_ab * gWx + dy_ab * gWy) / "
+    reaction_code = ("lam_b = ma * visc_mu2 / (rhob * rhoa) * dot(d@_ab, gW@) / "
                      "(r2 + eta2)\n"
                      "acc_b_@ -= lam_b * U@_ab")
 
@@ -121,7 +121,7 @@ def velocity_gradient_term(p: str, final: str, writes: tuple[str, ...]) -> Term:
     included, over every neighbour) into ``{p}_dudx`` ... ``{p}_dvdy``, then ``final``."""
     return Term("velocityGradient", ("prepass",), init=_GRADIENT_INIT.format(p=p),
                 pair=_GRADIENT_PAIR.format(p=p), final=final, applies=("all",),
-                sees=("all",), reads=("gradW",), writes=writes)
+                sees=("all",), reads=("gradW",), writes=writes, dims=(2,))
 
 
 @register

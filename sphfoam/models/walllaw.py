@@ -143,11 +143,9 @@ class LawCoeffs(Coeffs):
         return self
 
 _INIT = """\
-wl_nx = fld[F_nx, a]
-wl_ny = fld[F_ny, a]
+wl_n@ = fld[F_n@, a]
 wl_sw = 0.0
-wl_su = 0.0
-wl_sv = 0.0
+wl_sU@ = 0.0
 wl_sn = 0.0"""
 #: the SPH interpolation of the fluid's velocity relative to the wall particle a (the term
 #: shares the pre-pass loop of the SPS velocity gradient, which sees every neighbour, so it
@@ -156,23 +154,20 @@ _PAIR = """\
 if kindb == FLUID:
     wl_w = mb / rhob * Wab
     wl_sw += wl_w
-    wl_su -= wl_w * u_ab
-    wl_sv -= wl_w * v_ab
-    wl_sn -= wl_w * (dx_ab * wl_nx + dy_ab * wl_ny)     # n . (x_b - x_a)"""
+    wl_sU@ -= wl_w * U@_ab
+    wl_sn -= wl_w * dot(d@_ab, wl_n@)     # n . (x_b - x_a)"""
 _FINAL = """\
 wl_us = 0.0
 wl_tau = 0.0
-wl_tx = 0.0
-wl_ty = 0.0
+wl_t@ = 0.0
 if wl_sw > 0.0:
     # distance of the sample from the physical wall, delta behind the first wall row
     wl_y = turb_wldelta + wl_sn / wl_sw - (fld[F_wallDist, a] - turb_wld1)
-    wl_u = wl_su / wl_sw
-    wl_v = wl_sv / wl_sw
-    wl_un = wl_u * wl_nx + wl_v * wl_ny
-    wl_tx = wl_u - wl_un * wl_nx                  # tangential velocity relative to the wall
-    wl_ty = wl_v - wl_un * wl_ny
-    wl_ut = math.sqrt(wl_tx * wl_tx + wl_ty * wl_ty)
+    wl_U@ = wl_sU@ / wl_sw
+    wl_un = dot(wl_U@, wl_n@)
+    # the tangential velocity relative to the wall
+    wl_t@ = wl_U@ - wl_un * wl_n@
+    wl_ut = math.sqrt(dot(wl_t@, wl_t@))
     if wl_ut > 0.0 and wl_y > 0.0:
         {call}
         wl_tau = wl_us * wl_us / wl_ut            # u*^2 / |u_t|: times u_t, u*^2 t
@@ -189,4 +184,5 @@ def wall_law_term(law: str) -> Term:
     return Term("wallLaw", ("prepass",), init=_INIT, pair=_PAIR,
                 final=_FINAL.replace("{call}", _CALLS[law]), applies=("wall",),
                 sees=("all",), reads=("W", "field.nx", "field.ny", "field.wallDist"),
-                writes=("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy", "aux.turb_ustar"))
+                writes=("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy", "aux.turb_ustar"),
+                dims=(2,))
