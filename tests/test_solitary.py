@@ -17,6 +17,7 @@ from sphfoam.case.case import Case
 from sphfoam.case.times import list_times
 from sphfoam.io.fields import read_state
 from sphfoam.runner import run_case, setup_case
+from sphfoam.setup.waves import continuity_velocity, is_kinematic
 
 
 def test_solitary_wave_from_theory_keeps_height_and_celerity_over_ten_depths(tutorial):
@@ -40,18 +41,20 @@ def test_solitary_wave_from_theory_keeps_height_and_celerity_over_ten_depths(tut
     assert st.y[crest].max() + 0.5 * (d + A) / round((d + A) / 1.0) == pytest.approx(d + A,
                                                                                    abs=0.05)
     k = np.flatnonzero(crest)
-    np.testing.assert_allclose(st.u[k], kdv2.u(st.x[k], st.y[k], x0=-60.0), rtol=1e-9)
-    np.testing.assert_allclose(st.v[k], kdv2.w(st.x[k], st.y[k], x0=-60.0), rtol=1e-9,
-                               atol=1e-12)
+    # KdV2's u scaled to the flux c eta, w from continuity (waveProperties velocity continuity)
+    u, w = continuity_velocity(kdv2, st.x[k], st.y[k], -60.0)
+    np.testing.assert_allclose(st.u[k], u, rtol=1e-9)
+    np.testing.assert_allclose(st.v[k], w, rtol=1e-9, atol=1e-12)
     run_case(case, progress=False, echo=None)
     rows = np.loadtxt(case / "postProcessing" / "crest" / "0" / "crest.dat", ndmin=2)
     fit = np.loadtxt(case / "postProcessing" / "crest" / "0" / "celerity.dat", ndmin=2)
     x_c, eta_c = rows[:, 1], rows[:, 2]
     assert x_c.max() > 35.0                        # it did travel ten depths
     travelled = x_c > 30.0
-    # measured at 10 particles per depth: the crest drops from 3.00 to about 2.78 m within the
-    # first 0.5 s (the SPH surface settling from the theory's), then holds: 2.75-2.79 m over
-    # the last depth, a mean 7.8 % low. The mean is held to the 8 % bar, each sample to 9 %.
+    # measured at 10 particles per depth (particle surface): 2.97-3.01 m over the last depth,
+    # a mean 0.25 % low (the quiet start, issue 35; before the set-up's hole at the bed was
+    # fixed the crest dropped to about 2.78 m within 0.5 s and held there, 7.8 % low). The
+    # bars stay the old ones: the mean within 8 %, each sample within 9 %.
     assert abs(eta_c[travelled].mean() / A - 1) < 0.08, eta_c[travelled]
     assert np.all(np.abs(eta_c[travelled] / A - 1) < 0.09), eta_c[travelled]
     assert fit[0, 0] == pytest.approx(kdv2.c, rel=0.03)
@@ -106,7 +109,8 @@ def test_initial_waves_set_up_beside_wall_particles(tutorial):
     assert (st.kind != 0).sum() > 0
     f = np.flatnonzero((st.kind == 0) & (np.abs(st.x) < 0.51))   # the crest's columns
     assert f.size > 0
-    np.testing.assert_allclose(st.u[f], kdv2.u(st.x[f], st.y[f], x0=0.0), rtol=1e-9)
+    np.testing.assert_allclose(st.u[f], continuity_velocity(kdv2, st.x[f], st.y[f], 0.0)[0],
+                               rtol=1e-9)
 
 
 @pytest.mark.parametrize("boundary", ["mirrorGhosts", "stationaryGhosts"])
@@ -154,3 +158,123 @@ def test_a_rounded_dx_fills_the_tank_to_the_far_wall(tutorial, dx, boundary):
     assert cols[0] - (-150.0) == pytest.approx(0.5 * dx, rel=1e-3)
     assert 100.0 - cols[-1] == pytest.approx(0.5 * dx, rel=1e-3)
     np.testing.assert_allclose(np.diff(cols), dx, rtol=1e-4)   # cols rounded to 1e-5 m
+
+
+def _small_wall_case(tutorial, edits):
+    """The wall tutorial cut to a 100 m tank at d/dx = 8 with the hydrostatic mirrored bed,
+    1.5 s, a crestTracker (surface fraction) every 0.01 s."""
+    return tutorial("solitaryWallRunup", {
+        "system/particleDict:dx": 1.25,
+        "system/particleDict:fluid.water.min": [-50.0, 0.0],
+        "system/particleDict:fluid.water.max": [50.0, 10.0],
+        "system/particleDict:walls.tank.min": [-50.0, 0.0],
+        "system/particleDict:walls.tank.max": [50.0, 30.0],
+        "constant/sphProperties:boundary.pressure": "hydrostatic",
+        "system/controlDict:threads": 1,
+        "system/controlDict:endTime": 1.5,
+        "system/controlDict:writeInterval": 1.5,
+        "system/controlDict:functions": {"crest": {
+            "type": "crestTracker", "still": 10.0, "surface": "fraction",
+            "writeControl": "runTime", "writeInterval": 0.01}}, **edits})
+
+
+def test_exact_wave_starts_quiet(tutorial):
+    """Issue 35, a quiet start: the crest of the exact (Euler) solitary wave set up at t = 0
+    does not breathe. The wall tutorial cut to a 100 m tank at d/dx = 8, A/d = 0.3, the
+    hydrostatic mirrored bed; the crest (crestTracker, surface fraction, every 0.01 s) over
+    the first 1.5 s. Breathing: max - min of eta_c(t) about its least-squares line, in % of
+    A (benchmarks/breathing.py). Measured 0.35 %; with the set-up's old hole at the bed
+    under every column where round((d + eta)/dx) rounds up (before the bottom particle kept
+    half its own spacing from the bed) 7.6 %, the crest falling to 2.76 m at the column's
+    acoustic period 4 (d + A)/c0 = 0.46 s. The bar is the issue's goal, 0.5 % of A."""
+    A = 3.0
+    case = _small_wall_case(tutorial, {"constant/waveProperties:waves.incident.theory": "euler"})
+    run_case(case, progress=False, echo=None)
+    rows = np.loadtxt(case / "postProcessing" / "crest" / "0" / "crest.dat", ndmin=2)
+    t, eta = rows[:, 0], rows[:, 2]
+    assert t[-1] > 1.49 and t.size > 140
+    b, a = np.polyfit(t, eta, 1)
+    r = eta - (a + b * t)
+    breathing = 100.0 * (r.max() - r.min()) / A
+    assert breathing < 0.5, (breathing, eta[::10])
+    assert eta.min() > 0.99 * A, eta[::10]
+
+
+def test_kdv2_start_does_not_surge(tutorial):
+    """Issue 35: KdV2 (the tutorials' theory) set up with ``velocity continuity`` (u scaled
+    to the flux c eta, w from continuity) does not surge at the start: in the case of
+    :func:`test_exact_wave_starts_quiet` its crest stays below 3.037 m (+1.2 % of A) over
+    1.5 s, where KdV2's own, non-solenoidal velocity (``velocity theory``, P's set-up) sends
+    it to 3.097 m (+3.2 %) while the crest's trend triples (0.083 against 0.028 m/s)."""
+    A = 3.0
+    case = _small_wall_case(tutorial, {})
+    run_case(case, progress=False, echo=None)
+    rows = np.loadtxt(case / "postProcessing" / "crest" / "0" / "crest.dat", ndmin=2)
+    assert rows[-1, 0] > 1.49
+    assert rows[:, 2].max() < 1.02 * A, rows[::10, 2]
+
+
+def test_wall_particles_carry_the_waves_pressure(tutorial):
+    """Wall particles under an initial wave get the wave's own (non-hydrostatic) pressure,
+    continued hydrostatically from the nearest fluid particle: under the crest of the exact
+    wave at A/d = 0.3 the bed's pressure is 5.2 kPa below rho0 g (d + A), which the
+    hydrostatic rule of the still tank gave them. Beside still water nothing changes."""
+    from sphfoam.setup.waves import fields
+    d, dx = 10.0, 1.25
+    case = tutorial("solitaryWallRunup", {
+        "system/particleDict:dx": dx,
+        "constant/waveProperties:waves.incident.theory": "euler",
+        "constant/sphProperties:boundary": {"type": "stationaryGhosts"}})
+    c = Case(case)
+    st = setup_case(c, log=lambda m: None)
+    eos = c.models.sph["equationOfState"]
+    p = eos.pressure(st.rho, c.context)
+    w = (st.kind == 1) & (np.abs(st.x) < 2.0) & (st.y < 0)          # the bed under the crest
+    assert w.sum() >= 6
+    rho0, g = c.context.rho0, 9.81
+    _, _, pbed = fields(st.x[w], np.zeros(w.sum()), 0.0, d, list(c.waves.values()), g, rho0)
+    np.testing.assert_allclose(p[w], pbed - rho0 * g * st.y[w], rtol=2e-3)
+    assert (p[w] < rho0 * g * (d + 3.0 - st.y[w]) - 4000.0).all()
+    still = (st.kind == 1) & (st.x > 90.0) & (st.y < 0)                  # far from the wave
+    np.testing.assert_allclose(p[still], rho0 * g * (d - st.y[still]), rtol=1e-3)
+
+
+@pytest.mark.parametrize("theory", ["kdv2", "laitone", "kdv1"])
+def test_approximate_theories_start_solenoidal(tutorial, theory):
+    """waveProperties ``velocity continuity`` (the default): a theory whose own (u, w) is not
+    divergence-free or whose flux is not c eta gets u scaled to the flux c eta per column and
+    w from continuity; div u = 0 and the kinematic surface condition w = (u - c) eta_x hold
+    (KdV2's own: |div u| up to 12 % of |du/dx|, the surface condition off by 0.12 m/s).
+    ``velocity theory`` keeps the theory's own fields (P's set-up)."""
+    A, d = 3.0, 10.0
+    sw = registry.build("waveTheory", {"type": theory}).solitary(A, d)
+    assert not is_kinematic(sw)
+    x = np.linspace(-40.0, 40.0, 81)
+    eta = sw.eta(x)
+    e = 1e-4
+    for frac in (0.2, 0.6, 1.0):
+        z = frac * (d + eta)
+        dudx = (continuity_velocity(sw, x + e, z, 0.0)[0]
+                - continuity_velocity(sw, x - e, z, 0.0)[0]) / (2 * e)
+        dwdz = (continuity_velocity(sw, x, z + e, 0.0)[1]
+                - continuity_velocity(sw, x, z - e, 0.0)[1]) / (2 * e)
+        assert np.abs(dudx + dwdz).max() < 1e-5 * np.abs(dudx).max()
+    u, w = continuity_velocity(sw, x, d + eta, 0.0)
+    slope = (sw.eta(x + e) - sw.eta(x - e)) / (2 * e)
+    np.testing.assert_allclose(w, (u - sw.c) * slope, atol=1e-8)
+    assert np.abs(continuity_velocity(sw, x, np.zeros_like(x), 0.0)[1]).max() == 0.0
+    for exact in ("euler", "mcCowan", "boussinesq"):
+        assert is_kinematic(registry.build("waveTheory", {"type": exact}).solitary(A, d))
+    # the set-up: continuity by default, the theory's own with velocity theory
+    for mode in ("continuity", "theory"):
+        case = tutorial("solitaryWallRunup", {
+            "system/particleDict:dx": 1.25,
+            "constant/waveProperties:waves.incident.theory": theory,
+            **({"constant/waveProperties:waves.incident.velocity": mode}
+               if mode == "theory" else {})})
+        st = setup_case(Case(case), log=lambda m: None)
+        f = np.flatnonzero((st.kind == 0) & (np.abs(st.x) < 20.0))
+        uu, ww = (continuity_velocity(sw, st.x[f], st.y[f], 0.0) if mode == "continuity" else
+                  (sw.u(st.x[f], st.y[f]), sw.w(st.x[f], st.y[f])))
+        np.testing.assert_allclose(st.u[f], uu, rtol=1e-9)
+        np.testing.assert_allclose(st.v[f], ww, rtol=1e-9, atol=1e-12)

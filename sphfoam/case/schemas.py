@@ -435,6 +435,13 @@ class InitialWave(Strict):
     height: float = Field(gt=0, description="wave height A above the still water level (m)")
     x0: float = Field(description="crest position at t = 0 (m)")
     direction: Literal[1, -1] = Field(1, description="+1: travelling towards +x; -1: -x")
+    velocity: Literal["continuity", "theory"] = Field("continuity", description=(
+        "`continuity`: a theory whose (u, w) is not divergence-free or whose flux is not "
+        "c eta (KdV1, KdV2, Laitone) gets its u scaled per column to the flux c eta and w "
+        "from continuity, so the start is solenoidal and the surface translates at c "
+        "(sphfoam.setup.waves; the exact, McCowan and Boussinesq waves, and Fenton's where "
+        "its series is kinematically consistent to 1e-3, keep their own); `theory`: the "
+        "theory's own u and w as published (P §4's KdV2)"))
 
 
 class WaveProperties(Strict):

@@ -20,13 +20,16 @@ _JIT = dict(cache=True, fastmath=set(FASTMATH))
 
 
 @njit(cache=True)   # no fastmath: a NaN or infinite position must fail the range test
-def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
-    """Cell index of every particle; -1 marks a particle outside the domain box (or with a
-    non-finite position: the range test is done on the float, before any conversion to int).
+def bin_particles(x, y, z, x0, y0, z0, inv_cell, ncx, ncy, ncz, cell, lx, ly, lz):
+    """Cell index (iz ncy + iy) ncx + ix of every particle; -1 marks a particle outside the
+    domain box (or with a non-finite position: the range test is done on the float, before
+    any conversion to int). ``z`` is empty in two dimensions (then iz = 0, ncz = 1).
 
-    ``lx`` (``ly``) > 0 makes the axis periodic: positions are wrapped into the box first.
+    ``lx`` (``ly``, ``lz``) > 0 makes the axis periodic: positions are wrapped into the box
+    first.
     """
     n = x.shape[0]
+    three = z.shape[0] > 0
     outside = 0
     for a in range(n):
         if lx > 0.0:
@@ -35,31 +38,17 @@ def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, cell, lx, ly):
             y[a] = y0 + (y[a] - y0) % ly
         fx = (x[a] - x0) * inv_cell
         fy = (y[a] - y0) * inv_cell
-        if fx >= 0.0 and fx < ncx and fy >= 0.0 and fy < ncy:
-            cell[a] = int(fy) * ncx + int(fx)
-        else:
-            cell[a] = -1
-            outside += 1
-    return outside
-
-
-@njit(cache=True)   # no fastmath, as bin_particles
-def bin_particles_3d(x, y, z, x0, y0, z0, inv_cell, ncx, ncy, ncz, cell, lx, ly, lz):
-    """:func:`bin_particles` in three dimensions: cell (iz ncy + iy) ncx + ix."""
-    n = x.shape[0]
-    outside = 0
-    for a in range(n):
-        if lx > 0.0:
-            x[a] = x0 + (x[a] - x0) % lx
-        if ly > 0.0:
-            y[a] = y0 + (y[a] - y0) % ly
-        if lz > 0.0:
-            z[a] = z0 + (z[a] - z0) % lz
-        fx = (x[a] - x0) * inv_cell
-        fy = (y[a] - y0) * inv_cell
-        fz = (z[a] - z0) * inv_cell
-        if fx >= 0.0 and fx < ncx and fy >= 0.0 and fy < ncy and fz >= 0.0 and fz < ncz:
-            cell[a] = (int(fz) * ncy + int(fy)) * ncx + int(fx)
+        inside = fx >= 0.0 and fx < ncx and fy >= 0.0 and fy < ncy
+        iz = 0
+        if three:
+            if lz > 0.0:
+                z[a] = z0 + (z[a] - z0) % lz
+            fz = (z[a] - z0) * inv_cell
+            inside = inside and fz >= 0.0 and fz < ncz
+            if inside:
+                iz = int(fz)
+        if inside:
+            cell[a] = (iz * ncy + int(fy)) * ncx + int(fx)
         else:
             cell[a] = -1
             outside += 1
@@ -198,13 +187,9 @@ class CellList:
 
     def bin(self, x, y, z=None):
         cell = np.empty(x.shape[0], dtype=np.int64)
-        if self.dim == 3:
-            outside = bin_particles_3d(x, y, z, self.x0, self.y0, self.z0,
-                                       1.0 / self.cell_size, self.ncx, self.ncy, self.ncz,
-                                       cell, self.lx, self.ly, self.lz)
-        else:
-            outside = bin_particles(x, y, self.x0, self.y0, 1.0 / self.cell_size,
-                                    self.ncx, self.ncy, cell, self.lx, self.ly)
+        outside = bin_particles(x, y, x[:0] if z is None else z, self.x0, self.y0, self.z0,
+                                1.0 / self.cell_size, self.ncx, self.ncy, self.ncz, cell,
+                                self.lx, self.ly, self.lz)
         return cell, outside
 
     def grid(self) -> tuple:

@@ -24,6 +24,7 @@ import re
 from dataclasses import dataclass
 
 from sphfoam.engine import terms as T
+from sphfoam.engine.context import RunContext
 
 #: the state arrays an update may name (in the vocabulary of the contract)
 STATE_ARRAYS = {
@@ -89,26 +90,11 @@ def arrays_of(update: ParticleUpdate, dim: int = 2) -> list[str]:
     return out
 
 
-class StepContext:
-    """What an integrator's ``step`` sees of the simulation it advances."""
+class StepContext(RunContext):
+    """What an integrator's ``step`` sees of the simulation it advances: the hooks' view
+    (:class:`~sphfoam.engine.context.RunContext`) and the stages of a step."""
 
-    __slots__ = ("_sim",)
-
-    def __init__(self, sim):
-        self._sim = sim
-
-    @property
-    def state(self):
-        return self._sim.state
-
-    @property
-    def time(self) -> float:
-        """The time at the start of the step."""
-        return self._sim.time
-
-    @property
-    def step_index(self) -> int:
-        return self._sim.step_index
+    __slots__ = ()
 
     @property
     def filtered(self) -> bool:
