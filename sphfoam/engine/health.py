@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from sphfoam.engine.state import FLUID, GHOST, PERSISTENT_F8, PERSISTENT_I8, ParticleState
+from sphfoam.engine.state import FLUID, GHOST, PERSISTENT_I8, ParticleState
 
 #: what can diverge, with the title a user reads
 KINDS = {
@@ -204,11 +204,12 @@ class Snapshot:
         if n != self.n or extra != self.extra or self.arrays.get("u") is None or \
                 self.arrays["u"].dtype != st.u.dtype:
             # in the state's own precision (sphSchemes precision: float32 velocities, density)
-            self.arrays = {k: np.empty(n, dtype=getattr(st, k).dtype) for k in PERSISTENT_F8}
+            self.arrays = {k: np.empty(n, dtype=getattr(st, k).dtype)
+                           for k in st.persistent_f8}
             self.arrays.update({k: np.empty(n, dtype=np.float64) for k in extra})
             self.arrays.update({k: np.empty(n, dtype=np.int64) for k in PERSISTENT_I8})
             self.n, self.extra = n, extra
-        for k in PERSISTENT_F8 + PERSISTENT_I8:
+        for k in st.persistent_f8 + PERSISTENT_I8:
             self._copy(getattr(st, k), k, real)
         for k in extra:
             self._copy(st.extra[k], k, real)
@@ -224,7 +225,8 @@ class Snapshot:
         """The snapshot as a ParticleState (copies, so the snapshot can be reused)."""
         a = {k: v.copy() for k, v in self.arrays.items()}
         return ParticleState(a["x"], a["y"], a["u"], a["v"], a["rho"], a["m"], a["kind"],
-                             a["id"], {k: a[k] for k in self.extra})
+                             a["id"], {k: a[k] for k in self.extra}, z=a.get("z"),
+                             w=a.get("w"))
 
     def pressure(self, sim) -> np.ndarray:
         """Pressure of the snapshot from the case's equation of state."""

@@ -61,16 +61,19 @@ REDUCTION_CHUNKS = 64
 
 
 @njit(parallel=True, cache=True)   # no fastmath: a NaN position must not pass for a small displacement
-def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly, scratch):
+def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly, scratch, z, zr, w, z0, z1,
+                       lz):
     """(largest displacement^2 since (xr, yr), largest speed^2, a particle outside the box
     [x0, x1) x [y0, y1) or not finite). On a periodic axis (``lx``/``ly`` > 0, the period)
     positions are wrapped into the box as binning does and displacements are taken to the
     nearest image, so crossing the period is no reason to rebuild the list (its pairs use the
     nearest image too). A NaN counts as an infinite displacement or speed. Parallel over
     ``REDUCTION_CHUNKS`` ranges of particles, then the maxima of the ranges; ``scratch``: a
-    (3, REDUCTION_CHUNKS) float array the caller keeps (no allocation per step)."""
+    (3, REDUCTION_CHUNKS) float array the caller keeps (no allocation per step). ``z``,
+    ``zr``, ``w`` (empty in two dimensions), ``z0``, ``z1``, ``lz``: the third axis."""
     n = x.shape[0]
     nc = REDUCTION_CHUNKS
+    three = z.shape[0] > 0
     d2c = scratch[0]
     v2c = scratch[1]
     outc = scratch[2]
@@ -90,12 +93,22 @@ def displacement_check(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly, scratch):
             if ly > 0.0:
                 dy -= ly * np.floor(dy / ly + 0.5)
             d2 = dx * dx + dy * dy
+            s2 = u[a] * u[a] + v[a] * v[a]
+            inside = x[a] >= x0 and x[a] < x1 and y[a] >= y0 and y[a] < y1
+            if three:
+                if lz > 0.0:
+                    z[a] = z0 + (z[a] - z0) % lz
+                dz = z[a] - zr[a]
+                if lz > 0.0:
+                    dz -= lz * np.floor(dz / lz + 0.5)
+                d2 += dz * dz
+                s2 += w[a] * w[a]
+                inside = inside and z[a] >= z0 and z[a] < z1
             if not d2 <= d2max:
                 d2max = d2 if d2 == d2 else np.inf
-            s2 = u[a] * u[a] + v[a] * v[a]
             if not s2 <= v2max:
                 v2max = s2 if s2 == s2 else np.inf
-            if not (x[a] >= x0 and x[a] < x1 and y[a] >= y0 and y[a] < y1):
+            if not inside:
                 out = True
         d2c[ci] = d2max
         v2c[ci] = v2max

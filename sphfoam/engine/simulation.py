@@ -30,6 +30,22 @@ def prescribe_patch(x, y, u, v, patch, x0, y0, which, ox, oy, uu, vv):
             v[a] = vv
 
 
+def _refuse_two_dimensional_hooks(sel, motions) -> None:
+    """In three dimensions: refuse, by name, a selected model whose run-time hooks are
+    written for two (mirror ghosts, Adami's wall velocity, the wall law, XSPH's and the
+    shiftings' advection), and prescribed wall motion (not yet in three dimensions)."""
+    for m in sel.models():
+        hooks = [h for h in ("attach", "before_neighbours", "add_particles", "after_sort",
+                             "before_evaluation", "after_rates", "after_density_rate",
+                             "walls_moved", "after_step", "keeps_neighbours",
+                             "advection_velocity") if m.implements(h)]
+        if hooks and 3 not in getattr(m, "hook_dims", (2,)):
+            raise ValueError(f"{m.family} {m.name!r} has no 3-D form (its run-time hooks "
+                             f"{', '.join(hooks)} are two-dimensional)")
+    if motions:
+        raise ValueError("prescribed wall motion has no 3-D form yet")
+
+
 @dataclass
 class Removal:
     """Particles that left the domain box during a step."""
@@ -82,8 +98,13 @@ class Simulation:
         if cell_size_factor < 1.0:
             raise ValueError("cellSizeFactor must be >= 1 (cells smaller than the support miss "
                              "neighbours)")
+        if state.dim != sel.dim:
+            raise ValueError(f"a {state.dim}-D state and a {sel.dim}-D pipeline")
+        self.dim = sel.dim
+        if self.dim == 3:
+            _refuse_two_dimensional_hooks(sel, motions)
         self.cells = CellList(domain_lo, domain_hi, reach * cell_size_factor,
-                              sel.periodic_x, sel.periodic_y)
+                              sel.periodic_x, sel.periodic_y, sel.periodic_z)
         #: when the density filter's pass runs (the filter model's schedule), None: never
         schedules = [m.schedule() for m in sel.models() if m.schedule() is not None]
         self.filter_schedule = schedules[0] if pipeline.density_filter is not None and \
@@ -198,8 +219,11 @@ class Simulation:
         cl = self.cells
         x1 = cl.x0 + cl.ncx * cl.cell_size
         y1 = cl.y0 + cl.ncy * cl.cell_size
+        z1 = cl.z0 + cl.ncz * cl.cell_size
+        z, zr, w = (st.z, ref[2], st.w) if self.dim == 3 else (st.x[:0], st.x[:0], st.u[:0])
         d2, v2, out = displacement_check(st.x, st.y, ref[0], ref[1], st.u, st.v, cl.x0, cl.y0,
-                                         x1, y1, cl.lx, cl.ly, self._reduce)
+                                         x1, y1, cl.lx, cl.ly, self._reduce, z, zr, w, cl.z0,
+                                         z1, cl.lz)
         if out:
             return False
         reach = math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt
@@ -217,11 +241,11 @@ class Simulation:
             return
         self._fld = None
         self._run_hooks("before_neighbours")
-        cell, outside = self.cells.bin(st.x, st.y)
+        cell, outside = self.cells.bin(*st.positions)
         if outside:
             gone = cell < 0
             rem = Removal(self.time, int(gone.sum()), st.id[gone].copy(),
-                          np.column_stack([st.x[gone], st.y[gone]]))
+                          np.column_stack([a[gone] for a in st.positions]))
             self.removals.append(rem)
             if self.on_removal:
                 self.on_removal(rem)
@@ -235,8 +259,9 @@ class Simulation:
         # one neighbour list for every loop of the step: within the cell side, so a pair that
         # comes within the support during the step is in it (the margin cellSizeFactor - 1)
         self._nb = self.pipeline.neighbour_list(st.x, st.y, st.kind, self.cells,
-                                                self.cells.cell_size, *self._nb)
-        self._ref = (st.x.copy(), st.y.copy())
+                                                self.cells.cell_size, *self._nb,
+                                                z=st.z if self.dim == 3 else None)
+        self._ref = tuple(a.copy() for a in st.positions)
         self.list_built += 1
         self._half = (self.pipeline.half_lists(*self._nb, self.cells, self._half)
                       if self.half_lists else None)
@@ -262,7 +287,7 @@ class Simulation:
         nb_start, nb_idx = self._nb
         if nb_start is None or nb_start.shape[0] != st.n + 1:
             raise RuntimeError("the neighbour list is stale: call neighbour_update first")
-        args = (st.x, st.y, st.u, st.v, st.rho, st.p, st.c, st.m, st.kind, nb_start, nb_idx,
+        args = (*st.positions, *st.velocities, st.rho, st.p, st.c, st.m, st.kind, nb_start, nb_idx,
                 self.prm, self.aux, self._fld)
         if self.pipeline.pair_cache:
             # per listed pair: what the prepass stores for the later loops (kernel values)
@@ -302,14 +327,14 @@ class Simulation:
         """The velocity positions move with from the velocity now (``pU@`` of the
         integrators' updates)."""
         st = self.state
-        self._pU = self.position_velocity(st.u, st.v)
+        self._pU = self.position_velocity(st.u, st.v) if self.dim == 2 else st.velocities
 
     def run_update(self, name: str, scalars: dict):
         """The integrator's particle update ``name`` (``sphfoam.engine.stepping``)."""
         if self.updates is None or self.updates.integrator is not self.integrator:
             from sphfoam.engine.updates import ParticleUpdates
 
-            self.updates = ParticleUpdates(self.integrator)
+            self.updates = ParticleUpdates(self.integrator, self.dim)
         self.updates.run(name, self.state, self._pU, scalars)
 
     def filter_density(self):
@@ -349,7 +374,7 @@ class Simulation:
         if self.half_lists and self._half is not None and self.pipeline.rates_half is not None:
             self.pipeline.rates_half(*args, self._dealt_half(), st.ax, st.ay, st.drho, out_sigma)
         else:
-            self.pipeline.rates(*args, st.ax, st.ay, st.drho, out_sigma)
+            self.pipeline.rates(*args, *st.accelerations, st.drho, out_sigma)
         self._run_hooks("after_rates")
 
     def density_rate(self):
@@ -368,7 +393,8 @@ class Simulation:
             return self.delta_t
         st = self.state
         dt = stable_time_step_into(self.h, st.c, st.sigma, st.ax, st.ay, st.kind, self.beta,
-                                   self.force_condition, self._reduce[:2])
+                                   self.force_condition, self._reduce[:2],
+                                   st.az if self.dim == 3 else st.ax[:0])
         return min(dt, self.max_delta_t, self.model_dt_limit)
 
     # --- stepping ------------------------------------------------------------------------
@@ -403,4 +429,4 @@ class Simulation:
     def kinetic_energy(self) -> float:
         st = self.state
         f = st.kind == FLUID
-        return float(0.5 * np.sum(st.m[f] * (st.u[f] ** 2 + st.v[f] ** 2)))
+        return float(0.5 * np.sum(st.m[f] * sum(c[f] ** 2 for c in st.velocities)))

@@ -32,10 +32,20 @@ def kept_arrays(owner, name: str, k: int, n: int, dtype=np.float64) -> tuple:
 
 
 class ParticleState:
-    """Positions, velocities, density, mass, kind and original id of every particle."""
+    """Positions, velocities, density, mass, kind and original id of every particle; in two
+    (x, y; u, v) or three dimensions (with ``z``, ``w``: then also ``az``)."""
 
-    def __init__(self, x, y, u, v, rho, m, kind, id=None, extra=None):
+    def __init__(self, x, y, u, v, rho, m, kind, id=None, extra=None, z=None, w=None):
         n = len(x)
+        if (z is None) != (w is None):
+            raise ValueError("a three-dimensional state needs both z and w")
+        #: 2 or 3
+        self.dim = 2 if z is None else 3
+        #: the persistent float arrays of this state's dimension
+        self.persistent_f8 = PERSISTENT_F8 if self.dim == 2 else \
+            ("x", "y", "z", "u", "v", "w", "rho", "m")
+        self.working = WORKING if self.dim == 2 else ("u", "v", "w", "rho", "m")
+        self.scratch = SCRATCH if self.dim == 2 else SCRATCH + ("az",)
         #: further persistent float fields (e.g. an integrator's previous step), permuted,
         #: written to and read from time directories like the others
         self.extra: dict[str, np.ndarray] = {
@@ -44,11 +54,14 @@ class ParticleState:
         self.y = np.ascontiguousarray(y, dtype=np.float64)
         self.u = np.ascontiguousarray(u, dtype=np.float64)
         self.v = np.ascontiguousarray(v, dtype=np.float64)
+        if self.dim == 3:
+            self.z = np.ascontiguousarray(z, dtype=np.float64)
+            self.w = np.ascontiguousarray(w, dtype=np.float64)
         self.rho = np.ascontiguousarray(rho, dtype=np.float64)
         self.m = np.ascontiguousarray(m, dtype=np.float64)
         self.kind = np.ascontiguousarray(kind, dtype=np.int64)
         self.id = np.ascontiguousarray(np.arange(n) if id is None else id, dtype=np.int64)
-        for name in PERSISTENT_F8 + PERSISTENT_I8:
+        for name in self.persistent_f8 + PERSISTENT_I8:
             if getattr(self, name).shape != (n,):
                 raise ValueError(f"particle field {name!r} has shape "
                                  f"{getattr(self, name).shape}, expected ({n},)")
@@ -56,17 +69,32 @@ class ParticleState:
         self.dtype = np.dtype(np.float64)
         self._alloc_scratch()
 
+    @property
+    def positions(self) -> tuple:
+        """(x, y) or (x, y, z)."""
+        return (self.x, self.y) if self.dim == 2 else (self.x, self.y, self.z)
+
+    @property
+    def velocities(self) -> tuple:
+        """(u, v) or (u, v, w)."""
+        return (self.u, self.v) if self.dim == 2 else (self.u, self.v, self.w)
+
+    @property
+    def accelerations(self) -> tuple:
+        """(ax, ay) or (ax, ay, az): dv/dt of the last evaluation."""
+        return (self.ax, self.ay) if self.dim == 2 else (self.ax, self.ay, self.az)
+
     def set_precision(self, dtype) -> None:
         """Hold velocities, density, mass and the scratch arrays in ``dtype`` (float64 or
         float32); positions stay float64."""
         self.dtype = np.dtype(dtype)
-        for name in WORKING:
+        for name in self.working:
             setattr(self, name, np.ascontiguousarray(getattr(self, name), dtype=self.dtype))
         self._alloc_scratch()
 
     def _alloc_scratch(self):
         n = self.n
-        for name in SCRATCH:
+        for name in self.scratch:
             setattr(self, name, np.zeros(n, dtype=self.dtype))
 
     @property
@@ -80,8 +108,8 @@ class ParticleState:
     def apply(self, order: np.ndarray, permute):
         """Reorder every persistent array by ``order`` (one numba pass, no Python loops)."""
         extra = list(self.extra)
-        f8_names = [n for n in PERSISTENT_F8 if getattr(self, n).dtype == np.float64]
-        f4_names = [n for n in PERSISTENT_F8 if n not in f8_names]
+        f8_names = [n for n in self.persistent_f8 if getattr(self, n).dtype == np.float64]
+        f4_names = [n for n in self.persistent_f8 if n not in f8_names]
         f8 = np.stack([getattr(self, n) for n in f8_names] + [self.extra[k] for k in extra])
         i8 = np.stack([getattr(self, n) for n in PERSISTENT_I8])
         out_f, out_i = permute(order, f8, i8)
@@ -99,14 +127,16 @@ class ParticleState:
 
     def keep(self, mask: np.ndarray):
         """Drop the particles where ``mask`` is False."""
-        for name in PERSISTENT_F8 + PERSISTENT_I8:
+        for name in self.persistent_f8 + PERSISTENT_I8:
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
         for name in self.extra:
             self.extra[name] = np.ascontiguousarray(self.extra[name][mask])
         self._alloc_scratch()
 
     def append(self, x, y, u, v, rho, m, kind, id):
-        """Add particles at the end (extra fields get zeros)."""
+        """Add particles at the end (extra fields get zeros); two dimensions."""
+        if self.dim != 2:
+            raise ValueError("append: a two-dimensional state only")
         k = len(x)
         for name, new in zip(PERSISTENT_F8 + PERSISTENT_I8, (x, y, u, v, rho, m, kind, id)):
             old = getattr(self, name)
@@ -122,8 +152,9 @@ class ParticleState:
         real = self.kind != GHOST
         sel = slice(None) if real.all() else real
         out = {
-            "positions": np.column_stack([self.x[sel], self.y[sel]]),
-            "U": np.column_stack([self.u[sel], self.v[sel]]).astype(np.float64, copy=False),
+            "positions": np.column_stack([a[sel] for a in self.positions]),
+            "U": np.column_stack([a[sel] for a in self.velocities]).astype(np.float64,
+                                                                           copy=False),
             "rho": self.rho[sel].astype(np.float64),
             "mass": self.m[sel].astype(np.float64),
             "type": self.kind[sel].copy(),
@@ -144,5 +175,7 @@ class ParticleState:
         known = {"positions", "U", "rho", "mass", "type", "origId", "p"}
         extra = {k: a for k, a in f.items() if k not in known and a.ndim == 1
                  and a.dtype.kind == "f"}
+        three = pos.shape[1] == 3 and vel.shape[1] == 3
         return cls(pos[:, 0], pos[:, 1], vel[:, 0], vel[:, 1], f["rho"], f["mass"], f["type"],
-                   f.get("origId"), extra)
+                   f.get("origId"), extra, z=pos[:, 2] if three else None,
+                   w=vel[:, 2] if three else None)
