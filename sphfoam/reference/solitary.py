@@ -311,7 +311,7 @@ class FentonWave(SolitaryWave):
     def __init__(self, A, d, g=9.81, rho=1000.0):
         from fractions import Fraction
 
-        from sphfoam.models import fenton_coeffs as fc
+        from sphfoam.reference import fenton_coeffs as fc
 
         e = A / d if d > 0 else float("nan")
         self.alpha = (math.sqrt(0.75 * e) * sum(float(Fraction(a)) * e**i
@@ -359,7 +359,7 @@ class EulerWave(SolitaryWave):
     _CHUNK = 400
 
     def __init__(self, A, d, g=9.81, rho=1000.0):
-        from sphfoam.models.eulerwave import euler_solution
+        from sphfoam.reference.eulerwave import euler_solution
 
         if A > 0 and d > 0:
             self.sol = euler_solution(A / d)
