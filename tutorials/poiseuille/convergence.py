@@ -41,7 +41,7 @@ import numpy as np
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.runner import run_case, setup_case
-from sphfoam.sampling import channel_theory as ct
+from sphfoam.reference import channel_theory as ct
 from sphfoam.setup.channel import channel_width as _width
 from sphfoam.setup.channel import profile_function, uniform_start  # noqa: F401 (re-exported)
 
