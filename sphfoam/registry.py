@@ -75,10 +75,10 @@ MODEL_MODULES = (
     "sphfoam.models.filters", "sphfoam.models.corrections", "sphfoam.models.noop",
     "sphfoam.models.riemann", "sphfoam.models.adami",
     "sphfoam.models.integrators", "sphfoam.models.motion", "sphfoam.models.wavemakers",
-    "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.models.metrics",
+    "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.study.metrics",
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
     "sphfoam.models.diffusion", "sphfoam.models.shifting", "sphfoam.sampling.beach",
-    "sphfoam.models.beach_metrics",
+    "sphfoam.study.beach_metrics",
 )
 
 
