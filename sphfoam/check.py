@@ -16,7 +16,7 @@ from pathlib import Path
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError, Problem
-from sphfoam.settling import check_settling
+from sphfoam.setup.settling import check_settling
 from sphfoam.setup.sanity import check_geometry
 
 __all__ = ["check_case", "study_dicts", "CheckReport"]

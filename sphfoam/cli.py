@@ -233,7 +233,7 @@ def setup(case: Path = typer.Argument(Path("."), help="case directory"),
     Also writes the one-cell constant/polyMesh and CASE.foam that ParaView's OpenFOAM reader opens.
     """
     from sphfoam.io.fields import has_particles
-    from sphfoam.settling import setup_case
+    from sphfoam.setup.settling import setup_case
 
     c = _case(case)
     if has_particles(c.path / "0") and not force:

@@ -2,7 +2,7 @@
 inside the package imports this module). Running a case is now split by job:
 
 * :mod:`sphfoam.timeloop` — the time loop (``run_case``, ``RunReport``);
-* :mod:`sphfoam.settling` — set-up (``setup_case``, settled when controlDict asks);
+* :mod:`sphfoam.setup.settling` — set-up (``setup_case``, settled when controlDict asks);
 * :mod:`sphfoam.assemble` — a case's models into a simulation (``build_simulation``);
 * :mod:`sphfoam.io.timedirs` — time directories (``write_time``, ``start_folder``, ...).
 
@@ -11,7 +11,7 @@ New code uses those modules, or the Python API (``sphfoam.run``, ``sphfoam.setup
 
 from sphfoam.assemble import build_simulation, check_wall_fields, selection
 from sphfoam.io.timedirs import read_time_value, start_folder, write_time
-from sphfoam.settling import setup_case
+from sphfoam.setup.settling import setup_case
 from sphfoam.timeloop import Interrupted, Log, RunReport, run_case, write_schedule
 
 __all__ = ["build_simulation", "check_wall_fields", "selection", "read_time_value",

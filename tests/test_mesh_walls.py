@@ -9,7 +9,7 @@ import pytest
 
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
-from sphfoam.setup.geometry import segments_of
+from sphfoam.case.geometry import segments_of
 from sphfoam.case.meshwalls import MeshWallError, read_mesh_walls
 
 

@@ -172,7 +172,7 @@ def _box_sim(pipe, x, y, u, rho):
     ghosts (no gravity unless the pipeline has it); neighbours, equation of state and rates
     evaluated once."""
     from sphfoam.case.schemas import ParticleDict
-    from sphfoam.setup.geometry import segments_of
+    from sphfoam.case.geometry import segments_of
 
     pd = ParticleDict.model_validate(
         {"dx": DX, "walls": {"tank": {"type": "box", "min": (0, 0), "max": (0.4, 0.2),
