@@ -150,7 +150,7 @@ _FAMILY_ATTRS = ("coeffs.noSlip", ".noSlip ", "no_slip", ".every", "wall_density
 def test_engine_and_runner_name_no_model():
     names = {n for models in registry.families().values() for n in models} - _GENERIC
     files = sorted((PKG / "engine").glob("*.py")) + [
-        PKG / f for f in ("runner.py", "timeloop.py", "assemble.py", "setup/initial.py",
+        PKG / f for f in ("setup/settling.py", "timeloop.py", "assemble.py", "setup/initial.py",
                           "io/timedirs.py")]
     found = []
     for f in files:
@@ -217,7 +217,7 @@ def test_schedule_is_a_function_of_step_and_time():
 def test_function_objects_sample_the_same_after_a_restart(tutorial):
     """The same sampled times and the same values, restarted half way or not (a timeStep
     and a runTime function object)."""
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     common = {"type": "damBreakFront", "wallX": 0.0, "H0": 0.25, "plot": False}
     fos = {"front": {**common, "writeControl": "timeStep", "writeInterval": 7},
@@ -302,7 +302,8 @@ def test_the_reused_neighbour_list_holds_every_pair_at_every_evaluation(tutorial
     rates (mid-step stages included) every pair within the support is in the list."""
     from scipy.spatial import cKDTree
 
-    from sphfoam import runner
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup import setup_case
     from sphfoam.case.case import Case
     from sphfoam.engine.state import ParticleState
     from sphfoam.io.fields import read_state
@@ -310,8 +311,8 @@ def test_the_reused_neighbour_list_holds_every_pair_at_every_evaluation(tutorial
     d = tutorial("damBreak", {"system/particleDict:dx": 0.0125,
                               "system/controlDict:functions": {}})
     case = Case(d)
-    runner.setup_case(case, log=lambda *_: None)
-    sim = runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+    setup_case(case, log=lambda *_: None)
+    sim = build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
     rates = sim.rates
     checked = []
 
@@ -347,7 +348,8 @@ def test_pairs_of_two_non_fluid_particles_are_left_out_only_where_no_term_reads_
 
     from scipy.spatial import cKDTree
 
-    from sphfoam import runner
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup import setup_case
     from sphfoam.case.case import Case
     from sphfoam.engine.state import ParticleState
     from sphfoam.io.fields import read_state
@@ -355,8 +357,8 @@ def test_pairs_of_two_non_fluid_particles_are_left_out_only_where_no_term_reads_
     def build(name, edits):
         d = tutorial(name, {"system/controlDict:functions": {}, **edits})
         case = Case(d)
-        runner.setup_case(case, log=lambda *_: None)
-        return runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+        setup_case(case, log=lambda *_: None)
+        return build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
 
     wall = {"system/particleDict:dx": 1.25, "system/controlDict:endTime": 1.0}
     sims = [build("solitaryWallRunup", wall) for _ in range(2)]
@@ -395,7 +397,8 @@ def test_an_evaluation_no_time_step_is_taken_from_skips_sigma(tutorial, name, ed
     (``time_step_from_first_evaluation``): the mid-step evaluation skips sigma of T(3.89).
     30 steps give bitwise the state of evaluations that all compute it, and state.sigma is
     the first evaluation's."""
-    from sphfoam import runner
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup import setup_case
     from sphfoam.case.case import Case
     from sphfoam.engine.state import ParticleState
     from sphfoam.io.fields import read_state
@@ -403,8 +406,8 @@ def test_an_evaluation_no_time_step_is_taken_from_skips_sigma(tutorial, name, ed
     def build():
         d = tutorial(name, {"system/controlDict:functions": {}, **edits})
         case = Case(d)
-        runner.setup_case(case, log=lambda *_: None)
-        return runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+        setup_case(case, log=lambda *_: None)
+        return build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
 
     skip, full = build(), build()
     assert skip.integrator.time_step_from_first_evaluation

@@ -266,7 +266,8 @@ def test_hydrostatic_ghosts_hold_the_tank_at_rest(tutorial):
     from sphfoam.case.case import Case
     from sphfoam.case.times import list_times
     from sphfoam.io.fields import read_state
-    from sphfoam.runner import run_case, setup_case
+    from sphfoam.setup import setup_case
+    from sphfoam.timeloop import run_case
 
     err = {}
     for pressure in ("hydrostatic", "mirror"):

@@ -22,9 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam.case.case import Case
+import sphfoam
 from sphfoam.case.edit import clone_case
-from sphfoam.runner import run_case, setup_case
 from sphfoam.reference import wall_reflection as wr
 
 HERE = Path(__file__).resolve().parent
@@ -43,8 +42,8 @@ def run_one(ratio: float, dx: float, out: Path, left: float = -150.0) -> float:
         "system/particleDict:walls.tank.min": [left, 0.0],
         "system/controlDict:endTime": round(t_end, 3),
         "system/controlDict:writeInterval": round(t_end, 3)})
-    setup_case(Case(case), log=lambda m: None)
-    run_case(case, progress=False, echo=None)
+    sphfoam.setup_case(case)
+    sphfoam.run(case)
     rows = np.loadtxt(case / "postProcessing" / "runUp" / "0" / "runUp.dat", ndmin=2)
     return float(np.nanmax(rows[:, 1])) / DEPTH
 
