@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam import registry
+import sphfoam.registry as registry
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError, Problem
 from sphfoam.case.times import list_times

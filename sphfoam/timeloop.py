@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam import __version__
+from sphfoam._version import __version__
 from sphfoam.assemble import build_simulation
 from sphfoam.case.case import Case
 from sphfoam.case.times import time_name
