@@ -1,6 +1,7 @@
 """Run-time selectable models, the OpenFOAM way: ``family { type name; coeffs... }``.
 
-Every concrete model lives in ``sphfoam/models/<family module>.py`` and registers itself with
+Every concrete model lives in ``sphfoam/models/<family module>.py`` (function objects in
+``sphfoam/sampling/``, study metrics in ``sphfoam/study/``) and registers itself with
 :func:`register`.  The engine only ever asks the registry for a family and a name; it never
 imports a concrete model.  Each entry carries
 
