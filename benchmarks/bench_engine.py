@@ -122,7 +122,7 @@ def build(dx):
     return sel, ctx, build_pipeline(sel, ctx)
 
 
-#: the cases ``--case`` runs through the case machinery (setup, runner.build_simulation)
+#: the cases ``--case`` runs through the case machinery (setup, assemble.build_simulation)
 CASE_DIRS = {
     # the dam break matched with DualSPHysics 5.4 (issue 12): benchmarks/cases/damBreakMatched
     "matched": HERE / "cases" / "damBreakMatched",
@@ -244,7 +244,7 @@ def _case_size(src: Path) -> tuple[int, int, float]:
     if src not in _case_size_cache:
         from sphfoam.case.case import Case
         from sphfoam.case.edit import clone_case
-        from sphfoam.runner import setup_case
+        from sphfoam.setup import setup_case
 
         with tempfile.TemporaryDirectory(prefix="sphfoam-bench-size-") as tmp:
             d = clone_case(src, Path(tmp) / src.name)
@@ -302,7 +302,8 @@ def make_case_sim(name: str, total: int):
     function objects or writes."""
     import math as _m
 
-    from sphfoam import runner
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup import setup_case
     from sphfoam.case.case import Case
     from sphfoam.case.edit import clone_case
     from sphfoam.engine.state import ParticleState
@@ -318,10 +319,10 @@ def make_case_sim(name: str, total: int):
         edits["system/sphSchemes:precision"] = PRECISION
     d = clone_case(src, tmp / src.name, edits)
     case = Case(d)
-    runner.setup_case(case, log=lambda *_: None)
+    setup_case(case, log=lambda *_: None)
     state = ParticleState.from_fields(read_state(d / "0"))
     rss0 = _rss_bytes()
-    sim = runner.build_simulation(case, state)
+    sim = build_simulation(case, state)
     sim.step()
     st = sim.state
     mem = (_rss_bytes() - rss0) / max(st.n, 1)

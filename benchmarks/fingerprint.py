@@ -95,15 +95,16 @@ def run_case(name: str, steps: int, tmp: Path) -> dict[str, np.ndarray]:
     from sphfoam.case.edit import clone_case
     from sphfoam.engine.state import GHOST, ParticleState
     from sphfoam.io.fields import read_state
-    from sphfoam import runner
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup import setup_case
 
     tut, edits = CASES[name]
     case_dir = clone_case(TUT / tut, tmp / name)
     _edit(case_dir, edits)
     case = Case(case_dir)
-    runner.setup_case(case, log=lambda *_: None)
+    setup_case(case, log=lambda *_: None)
     state = ParticleState.from_fields(read_state(case_dir / "0"))
-    sim = runner.build_simulation(case, state)
+    sim = build_simulation(case, state)
     for _ in range(steps):
         sim.step()
     st = sim.state

@@ -84,7 +84,8 @@ def run_one(spec: dict) -> dict:
     import convergence as cv                      # tutorials/poiseuille/convergence.py
     from sphfoam.case import foamdict
     from sphfoam.case.case import Case
-    from sphfoam.runner import run_case, setup_case
+    from sphfoam.setup import setup_case
+    from sphfoam.timeloop import run_case
 
     case = Path(spec["case"])
     end = float(spec["end_time"])

@@ -13,7 +13,8 @@ import tempfile
 import time
 from pathlib import Path
 import numpy as np
-from sphfoam import runner
+from sphfoam.assemble import build_simulation
+from sphfoam.setup import setup_case
 from sphfoam.case.case import Case
 from sphfoam.case.edit import clone_case
 from sphfoam.engine.state import FLUID, ParticleState
@@ -22,8 +23,8 @@ TUT = Path(__file__).resolve().parent.parent / "tutorials"
 def run(tut, edits, t_end, probes, metric):
     tmp = Path(tempfile.mkdtemp())
     d = clone_case(TUT / tut, tmp / tut, dict({"system/controlDict:functions": {}}, **edits))
-    case = Case(d); runner.setup_case(case, log=lambda *_: None)
-    sim = runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+    case = Case(d); setup_case(case, log=lambda *_: None)
+    sim = build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
     sim.step(); sim.step()
     out = []; k = 0; steps = 0
     c0 = time.process_time()

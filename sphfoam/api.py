@@ -50,7 +50,7 @@ def setup_case(case: "Case | str | Path") -> "Case":
     """``sphfoam setup --force``: particles from ``system/particleDict`` into ``0/`` (and
     the one-cell mesh and ``CASE.foam`` for ParaView). (``sphfoam.setup`` is the
     package of the set-up code, hence the longer name.)"""
-    from sphfoam.settling import setup_case as _setup_case
+    from sphfoam.setup.settling import setup_case as _setup_case
 
     c = _case(case)
     _setup_case(c, log=lambda msg: None)
@@ -125,7 +125,7 @@ def prepare_case(case_dir: "Case | str | Path") -> tuple[Path, list[str]]:
     from sphfoam.case.times import list_times
     from sphfoam.io.fields import has_particles, upgrade_state
     from sphfoam.io.polymesh import write_foam_files
-    from sphfoam.setup.particles import default_domain
+    from sphfoam.case.geometry import default_domain
 
     case = _case(case_dir)
     foam = write_foam_files(case.path, *default_domain(case.particles), case.particles.dx)

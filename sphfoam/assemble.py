@@ -5,13 +5,12 @@ from __future__ import annotations
 
 from sphfoam.case.case import SPH_PROPERTIES, Case
 from sphfoam.case.errors import CaseError
+from sphfoam.case.geometry import default_domain, segments_of
 from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.engine.build import build_pipeline
 from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import WALL, ParticleState
-from sphfoam.setup.geometry import segments_of
-from sphfoam.setup.particles import default_domain
 
 
 def selection(case: Case) -> Selection:

@@ -16,7 +16,7 @@ from pathlib import Path
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError, Problem
-from sphfoam.settling import check_settling
+from sphfoam.setup.settling import check_settling
 from sphfoam.setup.sanity import check_geometry
 
 __all__ = ["check_case", "study_dicts", "CheckReport"]
@@ -65,7 +65,7 @@ def check_case(path: Path | str, study_runs: bool = True) -> CheckReport:
     ``study_runs``: also clone and validate every run of each study dictionary
     (:func:`validate_runs`)."""
     from sphfoam.case.metrics_dict import METRICS_DICT, load_metrics
-    from sphfoam import study as st
+    import sphfoam.study as st
 
     case = Case(path)
     if not case.path.is_dir():
@@ -113,7 +113,7 @@ def validate_runs(study) -> None:
     (its metrics too), as ``sphfoam study`` would before running anything."""
     import tempfile
 
-    from sphfoam import study as st
+    import sphfoam.study as st
     from sphfoam.case.edit import clone_case
     from sphfoam.case.metrics_dict import load_metrics
 

@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.panel import Panel
 from rich.table import Table
 
-from sphfoam import __version__
+from sphfoam._version import __version__
 
 app = typer.Typer(add_completion=True, no_args_is_help=True,
                   help="sphfoam: SPH for free-surface water flows, driven like an OpenFOAM case.")
@@ -239,7 +239,7 @@ def setup(case: Path = typer.Argument(Path("."), help="case directory"),
     Also writes the one-cell constant/polyMesh and CASE.foam that ParaView's OpenFOAM reader opens.
     """
     from sphfoam.io.fields import has_particles
-    from sphfoam.settling import setup_case
+    from sphfoam.setup.settling import setup_case
 
     c = _case(case)
     if has_particles(c.path / "0") and not force:
@@ -258,7 +258,7 @@ def check(case: Path = typer.Argument(Path("."), help="case directory, or a stud
     from sphfoam.check import check_case
 
     if case.is_file():
-        from sphfoam import study as st
+        import sphfoam.study as st
 
         s = st.load(case)
         console.print(f"{escape_(case.name)}: valid, {len(s.runs)} run(s) of base case "
@@ -297,7 +297,7 @@ def check(case: Path = typer.Argument(Path("."), help="case directory, or a stud
 @_guarded
 def models(family: Optional[str] = typer.Argument(None, help="only this family")):
     """List the registered models (the words you may write after `type`)."""
-    from sphfoam import registry
+    import sphfoam.registry as registry
 
     fams = registry.families()
     if family and family not in fams:
@@ -343,7 +343,7 @@ def plot(case: Path = typer.Argument(Path("."), help="case directory"),
                                                 "the Goring paddle or constant/waveProperties)"),
          depth: Optional[float] = typer.Option(None, help="still water depth d")):
     """PNG of every function object against its reference (theory or experiment)."""
-    from sphfoam import registry
+    import sphfoam.registry as registry
     from sphfoam.postprocess import plot_case
 
     c = _case(case)
@@ -392,7 +392,7 @@ def study(studydict: Path = typer.Argument(..., help="study dictionary"),
 
     Writes study.csv, study.md (runtime relative to the baseline, as T Table 4.3), pareto.png.
     """
-    from sphfoam import study as st
+    import sphfoam.study as st
 
     s = st.load(studydict, only)
     if dry_run:

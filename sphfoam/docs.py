@@ -23,7 +23,7 @@ import annotated_types
 from pydantic import BaseModel, BeforeValidator
 from pydantic.fields import FieldInfo
 
-from sphfoam import registry
+import sphfoam.registry as registry
 from sphfoam.case import case as case_mod
 from sphfoam.case import schemas
 from sphfoam.case.foamdict import DimensionSet

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam import registry
+import sphfoam.registry as registry
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError, Problem
 from sphfoam.case.times import list_times
@@ -286,10 +286,10 @@ def run_up_reference(mode: str, A: float, d: float, angle: float | None = None):
     """[(label, R)] of the maximum run-up of a solitary wave of height A in depth d: on a
     vertical wall, linear theory 2A, Su & Mirie's (1980) third order
     R/d = 2a + a^2/2 + 3a^3/4 and, for a = A/d <= 0.45, the fully nonlinear potential flow
-    (:func:`sphfoam.models.wall_reflection.wall_reflection`, a few seconds the first time);
+    (:func:`sphfoam.reference.wall_reflection.wall_reflection`, a few seconds the first time);
     on a plane beach, Synolakis (1987) R/d = 2.831 sqrt(cot beta) (A/d)^(5/4) (non-breaking)."""
     if mode == "wall":
-        from sphfoam.models import wall_reflection as wr
+        from sphfoam.reference import wall_reflection as wr
 
         refs = [("linear theory, 2A", 2.0 * A),
                 ("Su & Mirie (1980), third order", d * wr.su_mirie(A / d))]

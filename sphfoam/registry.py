@@ -1,6 +1,7 @@
 """Run-time selectable models, the OpenFOAM way: ``family { type name; coeffs... }``.
 
-Every concrete model lives in ``sphfoam/models/<family module>.py`` and registers itself with
+Every concrete model lives in ``sphfoam/models/<family module>.py`` (function objects in
+``sphfoam/sampling/``, study metrics in ``sphfoam/study/``) and registers itself with
 :func:`register`.  The engine only ever asks the registry for a family and a name; it never
 imports a concrete model.  Each entry carries
 
@@ -75,10 +76,10 @@ MODEL_MODULES = (
     "sphfoam.models.filters", "sphfoam.models.corrections", "sphfoam.models.noop",
     "sphfoam.models.riemann", "sphfoam.models.adami",
     "sphfoam.models.integrators", "sphfoam.models.motion", "sphfoam.models.wavemakers",
-    "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.models.metrics",
+    "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.study.metrics",
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
     "sphfoam.models.diffusion", "sphfoam.models.shifting", "sphfoam.sampling.beach",
-    "sphfoam.models.beach_metrics",
+    "sphfoam.study.beach_metrics",
 )
 
 

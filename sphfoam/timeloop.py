@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam import __version__
+from sphfoam._version import __version__
 from sphfoam.assemble import build_simulation
 from sphfoam.case.case import Case
 from sphfoam.case.times import time_name
@@ -24,7 +24,7 @@ from sphfoam.engine.threads import RunThreads, check_setting
 from sphfoam.io.fields import has_particles, read_state
 from sphfoam.io.timedirs import (case_lock, read_time_value, recover, start_folder,
                                  write_time)
-from sphfoam.settling import setup_case
+from sphfoam.setup.settling import setup_case
 
 
 class Log:

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_import_is_cheap_and_names_load_lazily():
     code = ("import sys, sphfoam; heavy = [m for m in ('numba', 'pydantic', 'vtkmodules', "
-            "'sphfoam.runner') if m in sys.modules]; print(heavy); "
+            "'sphfoam.timeloop') if m in sys.modules]; print(heavy); "
             "print(sphfoam.Case.__name__, sphfoam.read_time.__name__)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split("\n")

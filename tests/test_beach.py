@@ -256,7 +256,7 @@ def test_coarse_beach_case_breaks_and_runs_up(tutorial):
     the bore at the shoreline: this checks the machinery end to end, not T's breaking
     time.)"""
     from sphfoam.case.metrics_dict import evaluate_metrics
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     d, dx, toe = 0.1, 0.02, 0.5
     length = 0.4 / math.sin(math.radians(5.0))

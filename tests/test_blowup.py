@@ -18,7 +18,7 @@ from sphfoam.engine.health import (DENSITY, NONFINITE, SPEED, BlowUp, HealthMoni
 from sphfoam.engine.simulation import Removal
 from sphfoam.engine.state import FLUID, GHOST, WALL, ParticleState
 from sphfoam.io.fields import read_state
-from sphfoam.runner import run_case
+from sphfoam.timeloop import run_case
 
 RHO0, C0 = 1000.0, 20.0
 

@@ -32,8 +32,9 @@ from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, GHOST, WALL, ParticleState
 from sphfoam.io.fields import read_state
 from sphfoam.models.base import CaseContext
-from sphfoam.runner import run_case, setup_case
-from sphfoam.setup.geometry import fluid_side, segments_of
+from sphfoam.setup import setup_case
+from sphfoam.timeloop import run_case
+from sphfoam.case.geometry import fluid_side, segments_of
 from sphfoam.setup.particles import full_pairs, generate
 
 RHO0, G = 1000.0, 9.81

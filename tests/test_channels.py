@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from sphfoam.engine.state import FLUID
-from sphfoam.sampling import channel_theory as ct
+from sphfoam.reference import channel_theory as ct
 from sphfoam.sampling.profiles import VelocityProfile
 
 from conftest import TUTORIALS, set_entry

@@ -81,7 +81,7 @@ ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 def test_progress_bar_and_log_lines_share_the_console_and_end_at_100(tutorial):
     """A terminal console (forced): every log line comes out on a line of its own, never
     after bar characters, and the last frame of the bar reads 100%."""
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     case = tutorial("damBreak", {"system/particleDict:dx": 0.05,
                                  "system/controlDict:endTime": 0.02,

@@ -144,7 +144,7 @@ def test_example_kernel_is_normalised_and_its_gradient_consistent():
 
 
 def test_example_models_selected_by_a_case_and_run(tutorial):
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     case = tutorial("hydrostaticTank", {
         "constant/sphProperties:kernel": {"type": "wendlandC4Example", "hdx": 1.3},

@@ -32,7 +32,7 @@ from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import read_state
 from sphfoam.models.base import CaseContext
-from sphfoam.runner import run_case
+from sphfoam.timeloop import run_case
 
 RHO0 = 1000.0
 C0 = 20.0

@@ -12,7 +12,7 @@ import pytest
 
 import sphfoam.models  # noqa: F401  (registers the models)
 from sphfoam import registry
-from sphfoam.models import eulerwave
+from sphfoam.reference import eulerwave
 
 G = 9.81
 
@@ -197,7 +197,7 @@ def test_fenton_coefficients_reproduce_the_published_low_orders():
     c/sqrt(g d) = 1 + eps/2 - 3/20 eps^2 + 3/56 eps^3 - 309/5600 eps^4 (T^2 = 1 - S)."""
     from fractions import Fraction as Fr
 
-    from sphfoam.models import fenton_coeffs as fc
+    from sphfoam.reference import fenton_coeffs as fc
 
     eta = {k: Fr(v) for k, v in fc.ETA.items()}
     assert [eta[(1, 1)]] == [1]

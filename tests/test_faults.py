@@ -37,7 +37,9 @@ from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import CLOUD_DIR, has_particles, read_state
 from sphfoam.io.timedirs import (LOCK_FILE, CaseLocked, case_lock, check_time_dir, recover,
                                  write_time_dir)
-from sphfoam.runner import run_case, setup_case, start_folder, write_time
+from sphfoam.io.timedirs import start_folder, write_time
+from sphfoam.setup import setup_case
+from sphfoam.timeloop import run_case
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"
 KILLS = 16
@@ -64,7 +66,7 @@ KILL_SCRIPT = textwrap.dedent("""
     from sphfoam.case.case import Case
     from sphfoam.engine.state import ParticleState
     from sphfoam.io.fields import read_state
-    from sphfoam.runner import write_time
+    from sphfoam.io.timedirs import write_time
     case = Case(sys.argv[1])
     state = ParticleState.from_fields(read_state(case.path / "0"))
     print("ready", flush=True)

@@ -28,7 +28,9 @@ from sphfoam.case.case import Case
 from sphfoam.case.times import list_times
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import read_state
-from sphfoam.runner import build_simulation, run_case, setup_case
+from sphfoam.assemble import build_simulation
+from sphfoam.setup import setup_case
+from sphfoam.timeloop import run_case
 
 NEW = ["predictorCorrector", "verlet", "symplectic"]
 G = -9.81

@@ -66,9 +66,9 @@ def test_flume_study_measures_against_the_exact_wave():
 
 
 def test_wall_study_references_are_the_best_theory(tmp_path):
-    """R/d of the fully nonlinear potential flow (sphfoam.models.wall_reflection) where it
+    """R/d of the fully nonlinear potential flow (sphfoam.reference.wall_reflection) where it
     converges, a = A/d <= 0.4, else Su & Mirie's (1980) third order 2a + a^2/2 + 3a^3/4."""
-    from sphfoam.models import wall_reflection as wr
+    from sphfoam.reference import wall_reflection as wr
 
     base = _copy(tmp_path, "solitaryWallRunup")
     s = st.load(base / "studyDict.lowDissipation")

@@ -9,7 +9,7 @@ import pytest
 
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
-from sphfoam.setup.geometry import segments_of
+from sphfoam.case.geometry import segments_of
 from sphfoam.case.meshwalls import MeshWallError, read_mesh_walls
 
 
@@ -143,7 +143,7 @@ def test_mesh_wall_gives_the_particles_of_the_same_polyline(tutorial):
     """tutorials/damBreakObstacle's block from its OBJ file: the segments and the set-up
     particles (every boundary model places and labels wall particles from the segments) are
     those of the equivalent `polyline` wall."""
-    from sphfoam.runner import setup_case
+    from sphfoam.setup import setup_case
 
     edits = {"system/particleDict:dx": 0.02}
     mesh_case = tutorial("damBreakObstacle", edits)

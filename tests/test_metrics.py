@@ -17,7 +17,7 @@ from sphfoam.case.errors import CaseError
 from sphfoam.cli import app
 from sphfoam.engine.state import FLUID
 from sphfoam.case.metrics_dict import MetricValue, evaluate_metrics, load_metrics, relative_error
-from sphfoam.sampling import channel_theory as ct
+from sphfoam.reference import channel_theory as ct
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"
 

@@ -172,7 +172,7 @@ def _box_sim(pipe, x, y, u, rho):
     ghosts (no gravity unless the pipeline has it); neighbours, equation of state and rates
     evaluated once."""
     from sphfoam.case.schemas import ParticleDict
-    from sphfoam.setup.geometry import segments_of
+    from sphfoam.case.geometry import segments_of
 
     pd = ParticleDict.model_validate(
         {"dx": DX, "walls": {"tank": {"type": "box", "min": (0, 0), "max": (0.4, 0.2),
@@ -266,7 +266,8 @@ def test_hydrostatic_ghosts_hold_the_tank_at_rest(tutorial):
     from sphfoam.case.case import Case
     from sphfoam.case.times import list_times
     from sphfoam.io.fields import read_state
-    from sphfoam.runner import run_case, setup_case
+    from sphfoam.setup import setup_case
+    from sphfoam.timeloop import run_case
 
     err = {}
     for pressure in ("hydrostatic", "mirror"):

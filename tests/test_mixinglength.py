@@ -23,7 +23,7 @@ from sphfoam.engine.plan import Selection
 from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models.mirror import line_distance, segment_array
-from sphfoam.setup.geometry import Segment
+from sphfoam.case.geometry import Segment
 from test_walllaw import BASE, CTX, DELTA, DX, H, NCOL, NU, RHO0, source  # tests/ on sys.path
 
 KAPPA = 0.41

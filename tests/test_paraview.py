@@ -22,7 +22,8 @@ from sphfoam.case.case import Case
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.fields import read_field, read_state, write_field, write_state
 from sphfoam.io.vtk import export_case
-from sphfoam.runner import setup_case, write_time
+from sphfoam.io.timedirs import write_time
+from sphfoam.setup import setup_case
 
 READ_CASE = Path(__file__).parent / "paraview" / "read_case.py"
 READ_VTK = Path(__file__).parent / "paraview" / "read_vtk.py"

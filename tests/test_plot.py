@@ -18,7 +18,8 @@ from sphfoam.case.edit import set_entry
 from sphfoam.case.errors import CaseError
 from sphfoam.cli import app
 from sphfoam.postprocess import plot_case, run_up_reference, sample
-from sphfoam.runner import setup_case, write_time
+from sphfoam.io.timedirs import write_time
+from sphfoam.setup import setup_case
 
 quiet = dict(log=lambda m: None)
 

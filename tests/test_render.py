@@ -14,7 +14,8 @@ from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
 from sphfoam.cli import app
 from sphfoam.render import ffmpeg_available, render_case
-from sphfoam.runner import setup_case, write_time
+from sphfoam.io.timedirs import write_time
+from sphfoam.setup import setup_case
 
 VIRIDIS_LOW, VIRIDIS_HIGH = (68, 1, 84), (253, 231, 37)
 GREY = (154, 154, 154)

@@ -27,7 +27,7 @@ CHILD = textwrap.dedent("""
     from sphfoam.case.edit import clone_case
     from sphfoam.case.times import list_times
     from sphfoam.io.fields import read_state
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
     case = clone_case(Path(sys.argv[1]) / "tutorials" / "damBreak", Path(sys.argv[2]), {
         "system/controlDict:functions": {}, "system/particleDict:dx": 0.025,
         "constant/sphProperties:kernel": {"type": "wendlandC2", "hdx": 1.3},

@@ -17,7 +17,8 @@ from sphfoam.engine.simulation import Simulation
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.io.fields import read_state
 from sphfoam.models.base import CaseContext, PipelineModel
-from sphfoam.runner import run_case, setup_case
+from sphfoam.setup import setup_case
+from sphfoam.timeloop import run_case
 
 RHO0, G = 1000.0, 9.81
 DX, HDX, C0 = 0.01, 1.3, 20.0

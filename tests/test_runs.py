@@ -10,7 +10,7 @@ import pytest
 from sphfoam.case.case import Case
 from sphfoam.case.times import list_times
 from sphfoam.io.fields import read_state
-from sphfoam.runner import run_case
+from sphfoam.timeloop import run_case
 from sphfoam.sampling.damBreak import martin_moyce
 
 RHO0, G = 1000.0, 9.81

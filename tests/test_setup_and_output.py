@@ -11,7 +11,8 @@ from sphfoam.case.schemas import ParticleDict
 from sphfoam.case.times import list_times
 from sphfoam.cli import app
 from sphfoam.io.fields import read_state
-from sphfoam.runner import run_case, setup_case
+from sphfoam.setup import setup_case
+from sphfoam.timeloop import run_case
 from sphfoam.setup.particles import local_surface, polyline_points, wall_points
 
 

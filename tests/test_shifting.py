@@ -231,7 +231,7 @@ def test_tank_runs_with_shifting_beside_xsph_and_renormalised_diffusion(tutorial
 
     from sphfoam.case.times import list_times
     from sphfoam.io.fields import read_state
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     case = tutorial("hydrostaticTank", {
         "constant/sphProperties:densityFilter": {"type": "antuonoDeltaSPH"},

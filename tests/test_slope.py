@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from sphfoam.case.case import Case
 from sphfoam.cli import app
-from sphfoam.settling import setup_case
+from sphfoam.setup.settling import setup_case
 from sphfoam.setup.particles import seam_keep
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"

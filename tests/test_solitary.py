@@ -16,8 +16,9 @@ from sphfoam import registry
 from sphfoam.case.case import Case
 from sphfoam.case.times import list_times
 from sphfoam.io.fields import read_state
-from sphfoam.runner import run_case, setup_case
+from sphfoam.setup import setup_case
 from sphfoam.setup.waves import continuity_velocity, is_kinematic
+from sphfoam.timeloop import run_case
 
 
 def test_solitary_wave_from_theory_keeps_height_and_celerity_over_ten_depths(tutorial):

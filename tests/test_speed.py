@@ -9,7 +9,8 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from sphfoam import runner
+from sphfoam.assemble import build_simulation
+from sphfoam.setup import setup_case
 from sphfoam.case.case import Case
 from sphfoam.engine.state import GHOST, ParticleState
 from sphfoam.io.fields import read_state
@@ -18,8 +19,8 @@ from sphfoam.io.fields import read_state
 def _sim(tutorial, name, edits):
     d = tutorial(name, dict({"system/controlDict:functions": {}}, **edits))
     case = Case(d)
-    runner.setup_case(case, log=lambda *_: None)
-    return runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+    setup_case(case, log=lambda *_: None)
+    return build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
 
 
 def _real(sim):
@@ -185,8 +186,8 @@ def test_the_pair_cache_gives_the_uncached_rates_bit_for_bit(tutorial, monkeypat
                               "system/controlDict:functions": {},
                               "constant/sphProperties:velocityCorrection": {"type": "xsph"}})
     case = Case(d)
-    runner.setup_case(case, log=lambda *_: None)
-    sim = runner.build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
+    setup_case(case, log=lambda *_: None)
+    sim = build_simulation(case, ParticleState.from_fields(read_state(d / "0")))
     for _ in range(30):
         sim.step()
     pipe = sim.pipeline

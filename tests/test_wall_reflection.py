@@ -1,4 +1,4 @@
-"""The fully nonlinear wall run-up (sphfoam.models.wall_reflection): the HOS equations carry
+"""The fully nonlinear wall run-up (sphfoam.reference.wall_reflection): the HOS equations carry
 the exact solitary wave unchanged, converge with their order, conserve volume, and meet
 Su & Mirie's (1980) third-order run-up as the wave gets small."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sphfoam.models.wall_reflection import (head_on_collision, propagate, su_mirie,
+from sphfoam.reference.wall_reflection import (head_on_collision, propagate, su_mirie,
                                               wall_reflection)
 
 

@@ -290,7 +290,7 @@ def test_hybrid_is_accepted_and_particles_without_normals_are_refused(channel):
         check_wall_fields(Case(case), state)
     assert "constant/sphProperties: turbulence" in str(e.value)
     assert "nx, ny" in str(e.value) and "run 'sphfoam setup --force' again" in str(e.value)
-    # set up with it, the normals are there (from setup.geometry.wall_metadata)
+    # set up with it, the normals are there (from case.geometry.wall_metadata)
     setup_case(Case(case), log=lambda *a: None)
     s = read_state(case / "0")
     walls = s["type"] == WALL

@@ -367,7 +367,7 @@ def test_crest_cut_off_by_the_gauge_range():
     off and the celerity fitted 10 -> 40 m 0.9 % high, 20 -> 50 m 0.8 % low; symmetric about
     the highest reading x_c is within 0.04 m (measured 0.037 m) and every fit within 0.05 %
     (measured <= 0.032 %) of c. A crest inside the range is fitted as before."""
-    from sphfoam.models.wavetheory import EulerWave
+    from sphfoam.reference.solitary import EulerWave
 
     w = EulerWave(3.0, 10.0)
     c = w.c

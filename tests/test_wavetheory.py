@@ -13,6 +13,7 @@ from pydantic import ValidationError
 
 import sphfoam.models.goring  # noqa: F401  (registers before sphfoam.models imports it)
 import sphfoam.models.wavetheory as wt
+from sphfoam.reference import solitary
 from sphfoam import registry
 
 THEORIES = ["boussinesq", "mcCowan", "laitone", "kdv1", "kdv2"]
@@ -109,7 +110,7 @@ def test_celerity_increases_with_height(name):
 @pytest.mark.parametrize("eps", [0.001, 0.01, 0.05, 0.1, 0.3, 0.5, 0.7])
 def test_mccowan_M_N_solve_the_two_equations(eps):
     w = wave("mcCowan", eps * 3.0, 3.0)
-    r10, r11 = wt.mccowan_residuals(w.M, w.N, eps)                           # T(4.10), T(4.11)
+    r10, r11 = solitary.mccowan_residuals(w.M, w.N, eps)                     # T(4.10), T(4.11)
     assert abs(r10) < 1e-10 and abs(r11) < 1e-10
     assert 0 < w.M < math.pi / (1 + eps) and 0 < w.N < 2 / 3
     if eps <= 0.01:                                                          # M ~ sqrt(3 A/d)

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from sphfoam import registry
+import sphfoam.registry as registry
 from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
 from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, MeshWalls, ParticleDict,

@@ -1,6 +1,6 @@
 """``system/metricsDict`` (and a study's own metrics): loading, checking against the
 case's function objects, and evaluation after a run. The metrics themselves are the
-``metric`` family (``sphfoam.models.metrics``), built through the registry."""
+``metric`` family (``sphfoam.study.metrics``), built through the registry."""
 
 from __future__ import annotations
 

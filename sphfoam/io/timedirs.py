@@ -41,7 +41,7 @@ __all__ = ["write_time_dir", "check_time_dir", "recover", "case_lock", "CaseLock
 #: fields every time directory must hold (ParticleState.to_fields writes them all)
 REQUIRED_FIELDS = ("positions", "U", "rho", "mass", "type", "origId")
 LOCK_FILE = ".sphfoam.lock"
-#: the layout before settling (sphfoam.settling): no time name, so no reader of time
+#: the layout before settling (sphfoam.setup.settling): no time name, so no reader of time
 #: directories (restarts, sampling, ParaView's time series) takes it for a time
 UNSETTLED = "0.unsettled"
 

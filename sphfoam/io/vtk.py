@@ -8,7 +8,7 @@
     VTK/<case>.pvd               the time series of the .vtm files (open this one)
     VTK/<case>_fluid.vtp.series  the fluid alone as a time series (and _walls likewise)
     VTK/<case>_0.unsettled.vtm   the layout before settling, when the case was settled
-                                 (``0.unsettled/``, sphfoam.settling; not in the series)
+                                 (``0.unsettled/``, sphfoam.setup.settling; not in the series)
 
 Each ``.vtp`` is a vtkPolyData with one vertex cell per particle (so the Surface
 representation shows the points) and stores its time as ``TimeValue`` field data.
@@ -226,7 +226,7 @@ def export_case(
             series[block].append({"name": rel, "time": t})
         ET.SubElement(coll, "DataSet", timestep=repr(t), group="", part="0", file=f"{stem}.vtm")
     if times is None and has_particles(case_dir / UNSETTLED):
-        # the layout before settling (sphfoam.settling): beside the series, not in it
+        # the layout before settling (sphfoam.setup.settling): beside the series, not in it
         _write_vtm(out_dir, f"{name}_{UNSETTLED}", case_dir / UNSETTLED, 0.0)
     for block, files in series.items():
         (out_dir / f"{name}_{block}.vtp.series").write_text(

@@ -153,7 +153,7 @@ class MassFluxPaddle(WaveMaker):
         @field_validator("theory")
         @classmethod
         def _theory(cls, v):
-            from sphfoam import registry
+            import sphfoam.registry as registry
 
             if v not in registry.names("waveTheory"):
                 raise ValueError(str(registry.UnknownModel("waveTheory", v,
@@ -164,7 +164,7 @@ class MassFluxPaddle(WaveMaker):
         from scipy.integrate import cumulative_simpson
         from scipy.interpolate import CubicSpline
 
-        from sphfoam import registry
+        import sphfoam.registry as registry
 
         super().__init__(coeffs)
         c = self.coeffs

@@ -16,7 +16,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from sphfoam import registry
+import sphfoam.registry as registry
 from sphfoam.case import foamdict
 from sphfoam.case.schemas import Vector2
 from sphfoam.registry import Coeffs, Model, register

@@ -11,7 +11,7 @@ from typing import ClassVar
 
 from pydantic import Field, model_validator
 
-from sphfoam import registry
+import sphfoam.registry as registry
 from sphfoam.case.errors import CaseError
 from sphfoam.engine.terms import Term
 from sphfoam.models import walllaw as wl

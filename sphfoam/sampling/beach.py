@@ -5,7 +5,7 @@
 by the kinematic criterion (the crest particles outrun the crest); ``surfaceProfiles`` writes
 the free surface and the particles at chosen times (the shapes of T Figs 5.6-5.19), as
 ``.dat`` tables and PNG pictures. The metrics ``breakingTime`` and ``runUpPosition`` read
-them (and ``runUp mode beach``) for ``system/metricsDict`` (sphfoam.models.beach_metrics).
+them (and ``runUp mode beach``) for ``system/metricsDict`` (sphfoam.study.beach_metrics).
 
 Both objects read the fluid particles only and use the surface convention of
 :mod:`sphfoam.sampling.waves` (a particle's cell top, y + dx/2, is the surface).

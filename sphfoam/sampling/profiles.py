@@ -22,7 +22,7 @@ from pydantic import Field, field_validator, model_validator
 
 from sphfoam.engine.state import FLUID
 from sphfoam.registry import Coeffs, register
-from sphfoam.sampling import channel_theory as ct
+from sphfoam.reference import channel_theory as ct
 from sphfoam.sampling.base import FunctionObject
 
 _SUMMARY_COLUMNS = ("time", "uCentre", "uCentreTheory", "centreError%", "uMaxBins",

@@ -1,7 +1,8 @@
 """``sphfoam setup``: the particles of system/particleDict, hydrostatic and at rest, written
 as the case's ``0/`` (with the one-cell mesh and ``CASE.foam`` ParaView's reader needs).
-A case with controlDict ``settling`` is set up by :func:`sphfoam.settling.setup_case`, which
-uses the pieces here and settles the particles before writing ``0/``."""
+A case with controlDict ``settling`` is set up by
+:func:`sphfoam.setup.settling.setup_case`, which uses the pieces here and settles the
+particles before writing ``0/``."""
 
 from __future__ import annotations
 
@@ -9,17 +10,18 @@ from sphfoam.case.case import Case
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.polymesh import write_foam_files
 from sphfoam.io.timedirs import case_lock, write_time
-from sphfoam.setup.particles import default_domain, generate
+from sphfoam.case.geometry import default_domain
+from sphfoam.setup.particles import generate
 from sphfoam.setup.sanity import check_geometry
 
 
 def setup_case(case: Case, log=print) -> ParticleState:
     """Generate particles from system/particleDict and write them to ``0/`` (a case with
-    controlDict ``settling``: :func:`sphfoam.settling.setup_case`)."""
+    controlDict ``settling``: :func:`sphfoam.setup.settling.setup_case`)."""
     case.validate()
     if case.control.settling is not None:
         raise ValueError("this case settles its particles (controlDict settling): set it up "
-                         "with sphfoam.settling.setup_case")
+                         "with sphfoam.setup.settling.setup_case")
     check_geometry(case)
     with case_lock(case.path, "setup"):
         return _setup(case, log)

@@ -17,9 +17,9 @@ from scipy.spatial import cKDTree
 from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models.mirror import line_distance, segment_array
-from sphfoam.setup.geometry import (LATTICE_TOLERANCE, distance_to_walls, fluid_side,
-                                    lattice_count, lattice_offsets,
-                                    polylines_of, segments_of, wall_metadata)
+from sphfoam.case.geometry import (LATTICE_TOLERANCE, distance_to_walls, fluid_side,
+                                   lattice_count, lattice_offsets,
+                                   polylines_of, segments_of, wall_metadata)
 from sphfoam.setup.waves import fields as wave_fields
 from sphfoam.setup.waves import surface as wave_surface
 from sphfoam.setup.waves import wave_columns
@@ -143,7 +143,7 @@ def local_surface(xf, yf, dx):
     return top[col] + 0.5 * dx
 
 
-#: the per-wall-particle fields the set-up can write (sphfoam.setup.geometry.wall_metadata)
+#: the per-wall-particle fields the set-up can write (sphfoam.case.geometry.wall_metadata)
 WALL_METADATA = ("nx", "ny", "wallDist", "corner", "nFull")
 
 
@@ -319,24 +319,3 @@ def full_pairs(segs, xw, yw, dx, support_radius):
     sy = (yw[:, None] + off[None, :, 1]).ravel()
     wet = fluid_side(segs, sx, sy, dx).reshape(xw.size, len(off))
     return wet.sum(axis=1).astype(float)
-
-
-def default_domain(pd: ParticleDict):
-    """The box outside which particles are removed (see ``ParticleDict.domain``).
-
-    Computed from the geometry in particleDict alone, so a restart sees the same grid.
-    """
-    if pd.domain is not None:
-        return pd.domain.min, pd.domain.max
-    pts = []
-    for r in pd.fluid.values():
-        pts += [r.min, r.max] if isinstance(r, BoxRegion) else list(r.points)
-    for w in pd.walls.values():
-        L = w.layers * pd.dx
-        corners = [w.min, w.max] if isinstance(w, BoxWalls) else \
-            [p for pts, _ in polylines_of(w) for p in pts]
-        pts += [(c[0] + sx * L, c[1] + sy * L) for c in corners for sx in (-1, 1) for sy in (-1, 1)]
-    pts = np.asarray(pts, float)
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    margin = 10 * pd.dx
-    return (lo[0] - margin, lo[1] - margin), (hi[0] + margin, hi[1] + 0.5 * (hi[1] - lo[1]) + margin)

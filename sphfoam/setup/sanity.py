@@ -51,7 +51,7 @@ def _area(region) -> float:
 
 
 def _wall_length(w) -> float:
-    from sphfoam.setup.geometry import polylines_of
+    from sphfoam.case.geometry import polylines_of
 
     total = 0.0
     for pts, _side in polylines_of(w):
@@ -79,7 +79,7 @@ def _size(nbytes: float) -> str:
 def estimate(pd: ParticleDict, support: float = 2.0, hdx: float = 1.3) -> tuple[float, float]:
     """(particles, cells) the particleDict gives: fluid area / dx^2 + wall length x layers
     / dx, and the neighbour-grid cells of side ``support * hdx * dx`` over the domain."""
-    from sphfoam.setup.particles import default_domain
+    from sphfoam.case.geometry import default_domain
 
     dx = pd.dx
     n = sum(_area(r) for r in pd.fluid.values()) / dx / dx

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from sphfoam.case.schemas import BoxRegion
-from sphfoam.setup.geometry import lattice_count
+from sphfoam.case.geometry import lattice_count
 
 
 def wave_columns(region: BoxRegion, dx: float, waves, g: float):

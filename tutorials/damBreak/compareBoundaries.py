@@ -20,10 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
+import sphfoam
 from sphfoam import registry
-from sphfoam.case.case import Case
 from sphfoam.case.edit import clone_case
-from sphfoam.runner import run_case, setup_case
 from sphfoam.sampling.damBreak import martin_moyce
 
 HERE = Path(__file__).resolve().parent
@@ -37,9 +36,9 @@ def run(boundary: str, dx: float, T_end: float, out: Path) -> dict:
         "system/particleDict:dx": dx,
         "system/controlDict:endTime": round(t_end, 6),
         "system/controlDict:writeInterval": round(t_end / 3, 6)})
-    setup_case(Case(case), log=lambda m: None)
+    sphfoam.setup_case(case)
     t0 = time.perf_counter()
-    rep = run_case(case, progress=False, echo=None)
+    rep = sphfoam.run(case)
     wall = time.perf_counter() - t0
     rows = np.loadtxt(case / "postProcessing" / "front" / "0" / "front.dat")
     return {"rows": rows, "steps": rep.steps, "wall": wall, "particles": rep.particles,

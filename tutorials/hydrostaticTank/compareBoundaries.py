@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+import sphfoam
 from sphfoam import registry
 from sphfoam.case.case import Case
 from sphfoam.case.edit import clone_case
 from sphfoam.case.times import list_times
 from sphfoam.io.fields import read_state
-from sphfoam.runner import run_case, setup_case
 from sphfoam.sampling.hydrostatic import bed_pressure
 
 HERE = Path(__file__).resolve().parent
@@ -72,10 +72,10 @@ def main(argv=None):
             "system/controlDict:endTime": a.endTime,
             "system/controlDict:writeInterval": a.endTime / 50})
         c = Case(case)
-        setup_case(c, log=lambda m: None)
+        sphfoam.setup_case(c)
         reach = c.models.sph["kernel"].support * c.context.h
         t0 = time.perf_counter()
-        rep = run_case(case, progress=False, echo=None)
+        rep = sphfoam.run(case)
         wall = time.perf_counter() - t0
         m = measure(case, a.dx, reach)
         lines.append(f"| {b} | {m['bed']:.4f} | {m['bed_mean']:.4f} | {m['row']:.3f} | "

@@ -38,10 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
+import sphfoam
 from sphfoam.case import foamdict
 from sphfoam.case.case import Case
-from sphfoam.runner import run_case, setup_case
-from sphfoam.sampling import channel_theory as ct
+from sphfoam.reference import channel_theory as ct
 from sphfoam.setup.channel import channel_width as _width
 from sphfoam.setup.channel import profile_function, uniform_start  # noqa: F401 (re-exported)
 
@@ -129,7 +129,7 @@ def run_resolution(case: Path, start: str = "rest", threads: int | None = 1) -> 
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     try:
         c = Case(case)
-        setup_case(c, log=lambda *_: None)
+        sphfoam.setup_case(c)
         vel = None
         width = _width(Path(case))
         F, nu = c.gravity[0], c.transport.nu
@@ -137,7 +137,7 @@ def run_resolution(case: Path, start: str = "rest", threads: int | None = 1) -> 
             vel = lambda y: ct.poiseuille_steady(y, F, nu, width)   # noqa: E731
         uniform_start(case, vel)
         t0 = time.perf_counter()
-        rep = run_case(case, progress=False, echo=None)
+        rep = sphfoam.run(case)
         wall = time.perf_counter() - t0
     finally:
         numba.set_num_threads(old)

@@ -7,7 +7,7 @@ Each amplitude runs in ``runUp/A<A/H>/`` (a copy of this case with only the wave
 vmax and dx changed) until the reflected crest has left the wall; ``runUp/runUp.dat`` and
 ``runUp/runUp.png`` hold eta_max/H against A/H, with the linear-theory line 2 A/H for
 reference, the third-order theory of Su & Mirie (1980), R/H = 2a + a^2/2 + 3a^3/4, and the
-fully nonlinear potential flow (sphfoam.models.wall_reflection, for A/H <= 0.45; its
+fully nonlinear potential flow (sphfoam.reference.wall_reflection, for A/H <= 0.45; its
 column in runUp.dat is nan beyond).
 ``--left`` moves the tank's left end (the wave's crest starts at x = 0, the wall is at
 x = 100 m); -60 m saves 40 % of the particles for A/H >= 0.2, but smaller waves are too
@@ -22,10 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfoam.case.case import Case
+import sphfoam
 from sphfoam.case.edit import clone_case
-from sphfoam.runner import run_case, setup_case
-from sphfoam.models import wall_reflection as wr
+from sphfoam.reference import wall_reflection as wr
 
 HERE = Path(__file__).resolve().parent
 DEPTH, WALL, G = 10.0, 100.0, 9.81
@@ -43,8 +42,8 @@ def run_one(ratio: float, dx: float, out: Path, left: float = -150.0) -> float:
         "system/particleDict:walls.tank.min": [left, 0.0],
         "system/controlDict:endTime": round(t_end, 3),
         "system/controlDict:writeInterval": round(t_end, 3)})
-    setup_case(Case(case), log=lambda m: None)
-    run_case(case, progress=False, echo=None)
+    sphfoam.setup_case(case)
+    sphfoam.run(case)
     rows = np.loadtxt(case / "postProcessing" / "runUp" / "0" / "runUp.dat", ndmin=2)
     return float(np.nanmax(rows[:, 1])) / DEPTH
 

@@ -383,7 +383,7 @@ def run_one(spec: RunSpec) -> dict:
     from sphfoam.case.case import Case
     from sphfoam.engine.health import BlowUp
     from sphfoam.case.metrics_dict import evaluate_metrics
-    from sphfoam.settling import setup_case
+    from sphfoam.setup.settling import setup_case
     from sphfoam.timeloop import run_case
 
     path = Path(spec.path)

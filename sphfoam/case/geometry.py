@@ -6,7 +6,8 @@ sphfoam.case.meshwalls) becomes a list of
 two ways: particle boundaries (repulsive, stationary ghosts, hybrid) place wall particles along
 them and store, per wall particle, the normal of the nearest wall point, its distance behind
 the wall and whether that point is a corner; mirrored ghosts (T(3.77)-(3.80)) reflect fluid
-particles across the segments themselves, every step.
+particles across the segments themselves, every step. :func:`default_domain` is the box
+the geometry spans (set-up, assembly and the ParaView mesh share it).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphfoam.case.schemas import BoxWalls, MeshWalls, ParticleDict, SlopeWalls
+from sphfoam.case.schemas import BoxRegion, BoxWalls, MeshWalls, ParticleDict, SlopeWalls
 
 #: how far short of a whole number of spacings (in spacings) a length may fall and still get
 #: its last particle: a dx typed with a few digits (0.4166667 for d/24) makes a 200 m box
@@ -196,3 +197,24 @@ def fluid_side(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float) -> 
             nx[k], ny[k] = vx, vy
     side = (x - qx) * nx + (y - qy) * ny
     return (d >= 0.5 * dx * (1 - 1e-6)) & (side > 0)
+
+
+def default_domain(pd: ParticleDict):
+    """The box outside which particles are removed (see ``ParticleDict.domain``).
+
+    Computed from the geometry in particleDict alone, so a restart sees the same grid.
+    """
+    if pd.domain is not None:
+        return pd.domain.min, pd.domain.max
+    pts = []
+    for r in pd.fluid.values():
+        pts += [r.min, r.max] if isinstance(r, BoxRegion) else list(r.points)
+    for w in pd.walls.values():
+        L = w.layers * pd.dx
+        corners = [w.min, w.max] if isinstance(w, BoxWalls) else \
+            [p for pts, _ in polylines_of(w) for p in pts]
+        pts += [(c[0] + sx * L, c[1] + sy * L) for c in corners for sx in (-1, 1) for sy in (-1, 1)]
+    pts = np.asarray(pts, float)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    margin = 10 * pd.dx
+    return (lo[0] - margin, lo[1] - margin), (hi[0] + margin, hi[1] + 0.5 * (hi[1] - lo[1]) + margin)

@@ -32,7 +32,7 @@ modes up to kmax = 8/d) take a few seconds; above a = 0.4 the series stops conve
 :func:`head_on_collision` does the same for two unequal waves meeting head-on (P's collision
 case, a = 0.3 and 0.2: a peak of 0.53771 d, against a1 + a2 = 0.5 and the third order's 0.54125).
 
-The initial state is the exact (Euler) solitary wave of :mod:`sphfoam.models.eulerwave`,
+The initial state is the exact (Euler) solitary wave of :mod:`sphfoam.reference.eulerwave`,
 eta and psi = F x - c' alpha, so the incident wave is the steady wave of the same equations;
 :func:`propagate` checks that it stays so. The run-up is the maximum of eta(0, t), located
 by a parabola through the three samples around the largest.
@@ -46,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphfoam.models.eulerwave import euler_solution
+from sphfoam.reference.eulerwave import euler_solution
 
 #: largest A/d: the series converges to 1e-3 d at 0.4 (orders 8-12), to 2e-3 d only at 0.45,
 #: and diverges at 0.5 as the run-up (1.2 d) nears the depth

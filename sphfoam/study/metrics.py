@@ -27,7 +27,7 @@ from typing import Any, ClassVar, Literal, NoReturn
 import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from sphfoam import registry
+import sphfoam.registry as registry
 from sphfoam.case.errors import CaseError, did_you_mean, from_validation
 from sphfoam.case.metrics_dict import CONTROL_DICT, METRICS_DICT, MetricValue, relative_error
 from sphfoam.io.tables import read_table, start_folders

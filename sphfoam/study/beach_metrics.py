@@ -8,7 +8,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from sphfoam.models.metrics import Metric, MetricCoeffs
+from sphfoam.study.metrics import Metric, MetricCoeffs
 from sphfoam.registry import register
 from sphfoam.sampling.beach import read_breaking
 
