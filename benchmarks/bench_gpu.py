@@ -39,7 +39,8 @@ def _size(s: str) -> int:
 
 
 def _setup(tmp: Path, n: int, backend: str):
-    from sphfoam import runner
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup import setup_case
     from sphfoam.case.case import Case
     from sphfoam.case.edit import clone_case
     from sphfoam.engine.state import ParticleState
@@ -53,10 +54,10 @@ def _setup(tmp: Path, n: int, backend: str):
     case = Case(d)
     t0 = time.perf_counter()
     if not (d / "0" / "rho").exists():
-        runner.setup_case(case, log=lambda *_: None)
+        setup_case(case, log=lambda *_: None)
     setup_s = time.perf_counter() - t0
     st = ParticleState.from_fields(read_state(d / "0"))
-    return runner.build_simulation(case, st, backend=backend), dx, setup_s
+    return build_simulation(case, st, backend=backend), dx, setup_s
 
 
 def _device_bytes(sim) -> int:

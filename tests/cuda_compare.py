@@ -27,7 +27,8 @@ def _fields(sim):
 
 
 def compare(src: Path, edits: dict, steps: int) -> dict:
-    from sphfoam import runner
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup import setup_case
     from sphfoam.case.case import Case
     from sphfoam.case.edit import clone_case
     from sphfoam.engine.state import ParticleState
@@ -37,12 +38,12 @@ def compare(src: Path, edits: dict, steps: int) -> dict:
         d = clone_case(src, Path(tmp) / src.name, dict({"system/controlDict:functions": {}},
                                                        **edits))
         case = Case(d)
-        runner.setup_case(case, log=lambda *_: None)
+        setup_case(case, log=lambda *_: None)
         res = {}
         sims = {}
         for backend in ("cpu", "cuda"):
             st = ParticleState.from_fields(read_state(d / "0"))
-            sim = runner.build_simulation(case, st, backend=backend)
+            sim = build_simulation(case, st, backend=backend)
             if backend == "cpu":
                 sim.half_lists = False        # the gather, as the device runs it
             for _ in range(steps):

@@ -177,7 +177,7 @@ def test_example_3d_ready_term_expands_per_dimension():
 
 
 def test_example_3d_ready_viscosity_run_in_2d(tutorial):
-    from sphfoam.runner import run_case
+    from sphfoam.timeloop import run_case
 
     case = tutorial("hydrostaticTank", {
         "constant/sphProperties:viscosity": {"type": "laminarExample"},
