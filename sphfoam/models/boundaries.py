@@ -17,7 +17,7 @@ model                       wall particles       how the fluid feels the wall
 
 Where the fluid pair loop meets a wall neighbour ``b`` the repulsive forms read the wall
 normal ``fld[F_nx, b], fld[F_ny, b]`` (into the fluid) stored per wall particle by the set-up
-(``sphfoam.setup.geometry``). Corner treatment: a wall particle at a corner vertex (flag
+(``sphfoam.case.geometry``). Corner treatment: a wall particle at a corner vertex (flag
 ``corner``) has no single normal, so it repels radially, along r_ab, with chi = 1 (the force
 of a point rather than of a wall); its neighbours along either wall act with their own normals.
 """

@@ -129,7 +129,7 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
     @property
     def particle_fields(self) -> tuple[str, ...]:
         """The wall normal and distance behind the wall line the wall law reads (written by
-        the set-up for wall particles, sphfoam.setup.geometry.wall_metadata)."""
+        the set-up for wall particles, sphfoam.case.geometry.wall_metadata)."""
         return ("nx", "ny", "wallDist") if self.wall_law != "none" else ()
 
     def terms(self):
