@@ -11,31 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 
-import hashlib
-import importlib.util
-import os
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-from sphfoam._version import __version__
-from sphfoam.cachedir import cache_root
+from sphfoam.engine.generated import load_generated
 from sphfoam.engine.emit_cpu import generate_source, generate_updates
 from sphfoam.engine.pipeline import Pipeline, core_param_names
 from sphfoam.engine.plan import Selection
-
-
-def _package_fingerprint() -> str:
-    """Hash of the sources the generated module imports from (models, engine)."""
-    root = Path(__file__).resolve().parent.parent
-    hsh = hashlib.sha256(__version__.encode())
-    for sub in ("models", "engine"):
-        for f in sorted((root / sub).glob("*.py")):
-            hsh.update(f.name.encode())
-            hsh.update(f.read_bytes())
-    return hsh.hexdigest()
 
 
 def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0, 0.0),
@@ -85,7 +68,7 @@ def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,
             params[k] = float(val)
     names = list(params)
     src = generate_source(sel, names)
-    module, path = _load_generated(src, "pipeline")
+    module, path = load_generated(src, "pipeline")
     prm = np.array([params[k] for k in names], dtype=sel.dtype)
     t0 = time.perf_counter()
     funcs = _warm_up(module, prm)
@@ -151,30 +134,8 @@ def _warm_up(module, prm):
     return funcs
 
 
-def _load_generated(src: str, kind: str):
-    """(module, path) of generated source ``src``: written once under
-    ``<cache>/<kind>s/<key>/`` (``key`` hashes it with the package's models and engine) and
-    imported once per process."""
-    key = hashlib.sha256((src + _package_fingerprint()).encode()).hexdigest()[:20]
-    folder = cache_root() / f"{kind}s" / key
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"sphfoam_{kind}_{key}.py"
-    if not path.exists() or path.read_text() != src:
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(src)
-        os.replace(tmp, path)
-    modname = f"sphfoam_{kind}_{key}"
-    if modname in sys.modules:
-        return sys.modules[modname], path
-    spec = importlib.util.spec_from_file_location(modname, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[modname] = module
-    spec.loader.exec_module(module)
-    return module, path
-
-
 def build_updates(integrator, dim: int = 2):
     """The compiled module of ``integrator``'s particle updates (``update_<name>``,
     ``ARRAYS``), generated and cached as the pipelines are; numba compiles each function at
     its first call (for the state's precision) and caches it on disk."""
-    return _load_generated(generate_updates(integrator, dim), "update")[0]
+    return load_generated(generate_updates(integrator, dim), "update")[0]

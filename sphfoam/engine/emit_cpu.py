@@ -11,10 +11,9 @@ round the models' helper results and the pairs' relative positions to float32
 
 from __future__ import annotations
 
-import ast
-
 from sphfoam._version import __version__
-from sphfoam.engine.bodies import LoopBodies, _block, _indent, components, expand, particle_load, sum_over
+from sphfoam.engine import generated
+from sphfoam.engine.bodies import LoopBodies, _block, _indent, components, expand, particle_load
 from sphfoam.engine.fastmath import FASTMATH_SOURCE
 from sphfoam.engine.plan import Plan, Selection
 
@@ -466,44 +465,12 @@ _SINGLE_FUNCS = ("equation_of_state", "prepass", "rates", "density_rate", "step_
                  "density_filter", "rates_half", "density_half", "prepass_half")
 
 
-class _Float32Literals(ast.NodeTransformer):
-    """Float literals as ``F4(literal)`` and the results of the models' jitted helpers (the
-    kernel) as ``F4(call)``: with float32 arrays and coefficients numba then keeps the
-    arithmetic in float32 (a Python float literal is a float64 to numba)."""
-
-    def __init__(self, helpers: set[str]):
-        self.helpers = helpers
-
-    def visit_Constant(self, node):
-        if isinstance(node.value, float):
-            return ast.Call(ast.Name("F4", ast.Load()), [node], [])
-        return node
-
-    def visit_Call(self, node):
-        self.generic_visit(node)
-        if isinstance(node.func, ast.Name) and node.func.id in self.helpers:
-            return ast.Call(ast.Name("F4", ast.Load()), [node], [])
-        return node
-
-
 def working_precision(src: str, imports) -> str:
-    """The pipeline source with its working loops (``_SINGLE_FUNCS``) in float32: their
-    literals and helper results typed by :class:`_Float32Literals` (the relative positions
-    of the pairs are rounded where the bodies form them, ``LoopBodies(precision="single")``)."""
-    helpers = set()
-    for line in imports:
-        if " import " in line:
-            for item in line.split(" import ", 1)[1].split(","):
-                helpers.add(item.split(" as ")[-1].strip())
-    tree = ast.parse(src)
-    typer = _Float32Literals(helpers)
-    for node in tree.body:
-        if isinstance(node, ast.FunctionDef) and node.name in _SINGLE_FUNCS:
-            node.body = [typer.visit(stmt) for stmt in node.body]
-    at = next(i for i, n in enumerate(tree.body) if isinstance(n, ast.Assign)
-              and getattr(n.targets[0], "id", None) == "FLUID")
-    tree.body.insert(at, ast.parse("F4 = np.float32").body[0])
-    return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
+    """The pipeline source with its working loops (``_SINGLE_FUNCS``) in float32
+    (:func:`sphfoam.engine.generated.working_precision`; the relative positions of the
+    pairs are rounded where the bodies form them, ``LoopBodies(precision="single")``)."""
+    return generated.working_precision(src, generated.helper_names(imports),
+                                       lambda name: name in _SINGLE_FUNCS)
 
 
 def _self_count(plan) -> str:

@@ -4,16 +4,9 @@ compiles each kernel at its first launch."""
 
 from __future__ import annotations
 
-import hashlib
-import importlib.util
-import os
-import sys
-from pathlib import Path
-
 import numpy as np
 
-from sphfoam._version import __version__
-from sphfoam.cachedir import cache_root
+from sphfoam.engine.generated import load_generated
 from sphfoam.engine.plan import Selection
 
 #: the core coefficients every pipeline reads first (the same slots as the CPU's)
@@ -48,37 +41,6 @@ def check_supported(sel: Selection, motions=None) -> None:
     if bad:
         raise Unsupported("backend cuda cannot run this case: " + "; ".join(bad)
                           + " (use backend cpu)")
-
-
-def _fingerprint() -> str:
-    root = Path(__file__).resolve().parent.parent.parent
-    hsh = hashlib.sha256(__version__.encode())
-    for sub in ("models", "engine", "engine/cuda"):
-        for f in sorted((root / sub).glob("*.py")):
-            hsh.update(f.name.encode())
-            hsh.update(f.read_bytes())
-    return hsh.hexdigest()
-
-
-def load_generated(src: str, kind: str):
-    """(module, path) of ``src``, written once under ``<cache>/<kind>s/<key>/`` and imported
-    once per process (as the CPU backend's pipelines are)."""
-    key = hashlib.sha256((src + _fingerprint()).encode()).hexdigest()[:20]
-    folder = cache_root() / f"{kind}s" / key
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"sphfoam_{kind}_{key}.py"
-    if not path.exists() or path.read_text() != src:
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(src)
-        os.replace(tmp, path)
-    modname = f"sphfoam_{kind}_{key}"
-    if modname in sys.modules:
-        return sys.modules[modname], path
-    spec = importlib.util.spec_from_file_location(modname, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[modname] = module
-    spec.loader.exec_module(module)
-    return module, path
 
 
 def parameters(sel: Selection, ctx, domain_lo, domain_hi) -> dict[str, float]:

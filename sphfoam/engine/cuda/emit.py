@@ -13,9 +13,9 @@ the same lists in the same order. The integrators' particle updates
 
 from __future__ import annotations
 
-import ast
 
 from sphfoam._version import __version__
+from sphfoam.engine import generated
 from sphfoam.engine.bodies import LoopBodies, _block, components, expand, particle_load
 from sphfoam.engine.plan import Plan, Selection
 
@@ -258,36 +258,11 @@ def density_filter({ARGS}, out_rho):
 _WORKING = ("equation_of_state", "rates", "density_rate", "step_pass", "density_filter")
 
 
-class _Float32(ast.NodeTransformer):
-    """Float literals and the helpers' results as ``F4(...)`` (float32): with float32
-    arrays and coefficients the arithmetic then stays in float32."""
-
-    def __init__(self, helpers):
-        self.helpers = helpers
-
-    def visit_Constant(self, node):
-        if isinstance(node.value, float):
-            return ast.Call(ast.Name("F4", ast.Load()), [node], [])
-        return node
-
-    def visit_Call(self, node):
-        self.generic_visit(node)
-        if isinstance(node.func, ast.Name) and node.func.id in self.helpers:
-            return ast.Call(ast.Name("F4", ast.Load()), [node], [])
-        return node
-
-
 def _working_precision(src: str, helpers) -> str:
-    tree = ast.parse(src)
-    tr = _Float32(helpers)
-    for node in tree.body:
-        if isinstance(node, ast.FunctionDef) and (node.name in _WORKING
-                                                  or node.name.startswith("prepass_")):
-            node.body = [tr.visit(s) for s in node.body]
-    at = next(i for i, n in enumerate(tree.body) if isinstance(n, ast.Assign)
-              and getattr(n.targets[0], "id", None) == "FLUID")
-    tree.body.insert(at, ast.parse("F4 = np.float32").body[0])
-    return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
+    """The kernels of ``_WORKING`` and the prepasses in float32
+    (:func:`sphfoam.engine.generated.working_precision`)."""
+    return generated.working_precision(
+        src, helpers, lambda name: name in _WORKING or name.startswith("prepass_"))
 
 
 def generate_updates(integrator, dim: int = 2) -> str:
