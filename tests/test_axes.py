@@ -13,7 +13,7 @@ import pytest
 from sphfoam.engine import terms as T
 from sphfoam.engine.bodies import components, expand
 from sphfoam.engine.plan import Selection
-from tests.test_contract import _pipeline_models, selection
+from test_contract import _pipeline_models, selection  # tests/ is on sys.path (rootdir)
 
 D2 = (("x", "u"), ("y", "v"))
 D3 = (("x", "u"), ("y", "v"), ("z", "w"))
