@@ -33,15 +33,19 @@ def build_simulation(case: Case, state: ParticleState, backend: str | None = Non
     if (backend or getattr(case.schemes, "backend", "cpu")) == "cuda":
         return _cuda_simulation(case, state, sel, lo, hi)
     pipe = build_pipeline(sel, ctx, domain_lo=lo, domain_hi=hi)
-    c = case.control
-    return Simulation(state, pipe, case.models.integrator,
-                      segments=segments_of(case.particles), motions=case.models.motions,
-                      domain_lo=lo, domain_hi=hi, beta=c.maxCo,
-                      force_condition=case.schemes.timeStepControl.forceCondition,
-                      adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
-                      max_delta_t=c.maxDeltaT,
-                      cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
-                      dt_limit=min(m.dt_limit(ctx) for m in sel.models()))
+    return Simulation(state, pipe, case.models.integrator, **_stepping(case, sel, lo, hi))
+
+
+def _stepping(case: Case, sel: Selection, lo, hi) -> dict:
+    """What every backend's simulation takes from the case besides the state, the pipeline
+    and the integrator: walls, motions, domain and the time-step controls."""
+    c, ctx = case.control, case.context
+    return dict(segments=segments_of(case.particles), motions=case.models.motions,
+                domain_lo=lo, domain_hi=hi, beta=c.maxCo,
+                force_condition=case.schemes.timeStepControl.forceCondition,
+                adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT, max_delta_t=c.maxDeltaT,
+                cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
+                dt_limit=min(m.dt_limit(ctx) for m in sel.models()))
 
 
 def check_wall_fields(case: Case, state: ParticleState) -> None:
@@ -86,12 +90,4 @@ def _cuda_simulation(case: Case, state: ParticleState, sel, lo, hi):
         raise CaseError.single("system/sphSchemes", "backend", str(e)) from None
     from sphfoam.engine.cuda.runtime import CudaSimulation
 
-    c, ctx = case.control, case.context
-    return CudaSimulation(state, pipe, case.models.integrator,
-                          segments=segments_of(case.particles), motions=case.models.motions,
-                          domain_lo=lo, domain_hi=hi, beta=c.maxCo,
-                          force_condition=case.schemes.timeStepControl.forceCondition,
-                          adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT,
-                          max_delta_t=c.maxDeltaT,
-                          cell_size_factor=case.schemes.neighbourSearch.cellSizeFactor,
-                          dt_limit=min(m.dt_limit(ctx) for m in sel.models()))
+    return CudaSimulation(state, pipe, case.models.integrator, **_stepping(case, sel, lo, hi))

@@ -62,14 +62,15 @@ def _imported_helpers():
     its term code (``imports()``)."""
     import importlib
 
+    from sphfoam.models.base import PipelineModel
+
     out = []
     for family in registry.FAMILIES:
         for name in registry.names(family):
-            try:
-                m = registry.build(family, {"type": name})
-            except Exception:  # noqa: BLE001  (models that need coefficients: skipped)
-                continue
-            for line in getattr(m, "imports", lambda: [])():
+            if not issubclass(registry.get(family, name), PipelineModel):
+                continue                   # no term code (motions, function objects, ...)
+            m = registry.build(family, {"type": name})
+            for line in m.imports():
                 if line.strip() == "import math":       # device functions have math
                     continue
                 mod, names = line.replace("from ", "", 1).split(" import ")

@@ -15,7 +15,7 @@ from numba import njit, prange
 from sphfoam.engine.context import RunContext
 from sphfoam.engine.neighbours import REDUCTION_CHUNKS, CellList, displacement_check, permute
 from sphfoam.engine.state import FLUID, ParticleState
-from sphfoam.engine.stepping import StepContext
+from sphfoam.engine.stepping import StepContext, advance
 from sphfoam.engine.timestep import stable_time_step_into
 
 
@@ -399,25 +399,9 @@ class Simulation:
 
     # --- stepping ------------------------------------------------------------------------
     def step(self, dt_remaining: float = math.inf) -> float:
-        """Re-sort, filter the density when due, then one step of the integrator."""
-        self.move_walls(self.time)
-        self.neighbour_update()
-        self.step_pass()
-        self.filtered = bool(self.filter_schedule and
-                             self.filter_schedule.due_before_step(self.step_index))
-        if self.filtered:
-            self.filter_density()
-        self._prepassed = False
-        self._evaluations = 0
-        try:
-            dt = self.integrator.step(self._stepping, dt_remaining)
-        finally:
-            self._prepassed = None
-            self._evaluations = None
-            self._pU = None
-        self.last_dt = dt               # the simulation owns the time and the step
-        self.time += dt
-        self.step_index += 1
+        """Re-sort, filter the density when due, then one step of the integrator
+        (:func:`sphfoam.engine.stepping.advance`)."""
+        dt = advance(self, dt_remaining)
         self._run_hooks("after_step")
         return dt
 

@@ -130,3 +130,28 @@ class StepContext(RunContext):
     def move_walls(self, t: float) -> None:
         """Walls with a prescribed motion to where they are at time ``t``."""
         self._sim.move_walls(t)
+
+
+def advance(sim, dt_remaining: float) -> float:
+    """One step of a backend's simulation: walls to where they are at the step's start, the
+    neighbour update, the per-step pass, the density filter when due, then the integrator's
+    step; the simulation keeps the time and the step (``last_dt``). Returns dt."""
+    sim.move_walls(sim.time)
+    sim.neighbour_update()
+    sim.step_pass()
+    sim.filtered = bool(sim.filter_schedule and
+                        sim.filter_schedule.due_before_step(sim.step_index))
+    if sim.filtered:
+        sim.filter_density()
+    sim._prepassed = False
+    sim._evaluations = 0
+    try:
+        dt = sim.integrator.step(sim._stepping, dt_remaining)
+    finally:
+        sim._prepassed = None
+        sim._evaluations = None
+        sim._pU = None
+    sim.last_dt = dt
+    sim.time += dt
+    sim.step_index += 1
+    return dt

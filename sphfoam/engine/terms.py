@@ -302,7 +302,7 @@ AXES = (("x", "u"), ("y", "v"), ("z", "w"))
 
 def expand_names(names: tuple[str, ...], dim: int = 2) -> tuple[str, ...]:
     """Declared names (``reads``, ``writes``, ``corrects``, ``sums``) with each one holding
-    ``@`` written once per component: ``aux.xsph_dU@`` is ``aux.xsph_du``, ``aux.xsph_dv``."""
+    ``@`` written once per component: ``aux.name_dU@`` is ``aux.name_du``, ``aux.name_dv``."""
     out = []
     for n in names:
         out += [n.replace("U@", v).replace("@", ax) for ax, v in AXES[:dim]] if "@" in n \

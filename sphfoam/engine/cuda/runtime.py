@@ -19,7 +19,7 @@ from sphfoam.engine.cuda import cuda_module
 from sphfoam.engine.neighbours import CellList
 from sphfoam.engine.schedule import Schedule
 from sphfoam.engine.state import FLUID, ParticleState
-from sphfoam.engine.stepping import StepContext, components, field_components
+from sphfoam.engine.stepping import StepContext, advance, components, field_components
 
 #: steps between the time loop's health checks (the state copied back for them)
 HEALTH_EVERY = 100
@@ -238,6 +238,10 @@ class CudaSimulation:
         return math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt < 0.5 * self.skin
 
     def neighbour_update(self):
+        """The neighbour update of this step, timed (``_timed``)."""
+        self._timed("neighbours", self._update_neighbours)
+
+    def _update_neighbours(self):
         """The list of this step: the previous one while it is valid, else bin, sort by
         cell (deterministic), drop particles that left and list the neighbours."""
         if self._list_still_valid():
@@ -467,23 +471,6 @@ class CudaSimulation:
     # --- stepping -------------------------------------------------------------------------
     def step(self, dt_remaining: float = math.inf) -> float:
         """Re-sort, filter the density when due, then one step of the integrator."""
-        self.move_walls(self.time)
-        self._timed("neighbours", self.neighbour_update)
-        self.step_pass()
-        self.filtered = bool(self.filter_schedule and
-                             self.filter_schedule.due_before_step(self.step_index))
-        if self.filtered:
-            self.filter_density()
-        self._prepassed = False
-        self._evaluations = 0
-        try:
-            dt = self.integrator.step(self._stepping, dt_remaining)
-        finally:
-            self._prepassed = None
-            self._evaluations = None
-            self._pU = None
-        self.last_dt = dt
-        self.time += dt
-        self.step_index += 1
+        dt = advance(self, dt_remaining)
         self._dirty = True
         return dt
