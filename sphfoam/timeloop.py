@@ -22,8 +22,8 @@ from sphfoam.engine.schedule import Schedule
 from sphfoam.engine.state import GHOST, ParticleState
 from sphfoam.engine.threads import RunThreads, check_setting
 from sphfoam.io.fields import has_particles, read_state
-from sphfoam.io.timedirs import (case_lock, read_time_value, recover, start_folder,
-                                 write_time)
+from sphfoam.io.timedirs import (case_lock, check_time_dir, read_time_value, recover,
+                                 start_folder, write_time)
 from sphfoam.setup.settling import setup_case
 
 
@@ -185,19 +185,26 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
             if progress_due.due(sim.step_index, sim.time, t_prev):
                 bar.update(sim, dt)
     except KeyboardInterrupt:
+        done = _written_already(case, sim, start_name)
+        if done is not None and (not written or written[-1] != done):
+            written.append(done)          # the interrupt landed after the atomic rename
         latest = written[-1].name if written else start_name
-        if stop.hard:                     # a second Ctrl-C: stopped at once, maybe mid-step
+        if stop.hard and done is None:    # a second Ctrl-C: stopped at once, maybe mid-step
             log(f"interrupted twice at time {sim.time:.6g}: stopped at once; the current "
                 f"state was NOT written (latest complete time directory: {latest})")
             raise Interrupted(None, latest) from None
         # the first Ctrl-C only raises a flag (see _StopRequest): the state is a whole step
-        log(f"interrupted at time {sim.time:.6g}: writing the current state")
-        try:
-            written.append(_write(case, sim, log))
-        except KeyboardInterrupt:         # the write is atomic: nothing half-written is left
-            log(f"interrupted again while writing: the current state was NOT written "
-                f"(latest complete time directory: {latest})")
-            raise Interrupted(None, latest) from None
+        if done is None:
+            log(f"interrupted at time {sim.time:.6g}: writing the current state")
+            try:
+                written.append(_write(case, sim, log))
+            except KeyboardInterrupt:     # the write is atomic: complete or not there at all
+                done = _written_already(case, sim, start_name)
+                if done is None:
+                    log(f"interrupted again while writing: the current state was NOT "
+                        f"written (latest complete time directory: {latest})")
+                    raise Interrupted(None, latest) from None
+                written.append(done)
         raise Interrupted(written[-1].name, written[-1].name) from None
     finally:
         stop.restore()
@@ -266,6 +273,22 @@ def _write(case, sim, log) -> Path:
     log(f"time {folder.name}: written (step {sim.step_index}, dt {sim.last_dt:.4g}, "
         f"KE {sim.kinetic_energy():.4g} J/m)")
     return folder
+
+
+def _written_already(case, sim, start_name: str) -> Path | None:
+    """The time directory of the current step if it is complete on disk: a Ctrl-C that
+    lands after the atomic rename of a write but before the write returns leaves it whole.
+    The start's own directory does not count (the run wrote nothing)."""
+    folder = case.path / time_name(sim.time, case.control.timePrecision)
+    if folder.name == start_name:
+        return None
+    try:
+        if has_particles(folder) and read_time_value(folder)[1] == sim.step_index \
+                and check_time_dir(folder)[0] is None:
+            return folder
+    except (OSError, ValueError):
+        pass
+    return None
 
 
 def _log_quietly(log, msg: str) -> None:
