@@ -21,7 +21,8 @@ def selection(case: Case) -> Selection:
     return Selection(**{f: case.models.sph[f] for f in SPH_FAMILIES},
                      adjust_time_step=case.control.adjustTimeStep,
                      periodic_x="x" in periodic, periodic_y="y" in periodic,
-                     precision=case.schemes.precision)
+                     periodic_z="z" in periodic, precision=case.schemes.precision,
+                     dim=case.dimension)
 
 
 def build_simulation(case: Case, state: ParticleState, backend: str | None = None):

@@ -103,7 +103,7 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
         setup_case(case, log)
         folder = case.path / "0"
     t0, index = read_time_value(folder)
-    state = ParticleState.from_fields(read_state(folder))
+    state = ParticleState.from_fields(read_state(folder, case.dimension))
     log(f"starting from time {folder.name} ({state.n} particles, {state.n_fluid} fluid)")
     sim = build_simulation(case, state)
     sim.time, sim.step_index = t0, index
@@ -271,7 +271,7 @@ def _write(case, sim, log) -> Path:
     folder = write_time(case, sim.state, sim.time, sim.step_index, sim.last_dt,
                         p=sim.pressure())
     log(f"time {folder.name}: written (step {sim.step_index}, dt {sim.last_dt:.4g}, "
-        f"KE {sim.kinetic_energy():.4g} J/m)")
+        f"KE {sim.kinetic_energy():.4g} {sim.energy_unit})")
     return folder
 
 

@@ -82,9 +82,21 @@ class Case:
         rel, schema = FILES[key]
         raw = self.read_dict(rel)
         try:
-            return schema.model_validate(raw)
+            return schema.model_validate(raw, context={"dim": self.dimension})
         except ValidationError as e:
             raise from_validation(e, rel, schema) from None
+
+    @cached_property
+    def dimension(self) -> int:
+        """2 or 3: ``system/particleDict``'s ``dimension`` (the one switch of a 3-D case;
+        every point and vector of the case then has as many components). A missing or
+        unreadable particleDict reads as 2 here and is reported when it is validated."""
+        try:
+            raw = self.read_dict(FILES["particleDict"][0], required=False)
+        except CaseError:
+            return 2
+        d = raw.get("dimension", 2)
+        return d if d in (2, 3) and not isinstance(d, bool) else 2
 
     @cached_property
     def control(self) -> ControlDict:
@@ -119,7 +131,7 @@ class Case:
         return self._validated("transportProperties")
 
     @cached_property
-    def gravity(self) -> tuple[float, float]:
+    def gravity(self) -> tuple[float, ...]:
         return self._validated("g").value
 
     @cached_property
@@ -163,6 +175,13 @@ class Case:
             mdl = build_model(family, spec, SPH_PROPERTIES, family, problems)
             if mdl is not None:
                 sph[family] = mdl
+        if self.dimension == 3:       # a model without a 3-D form is refused by name
+            from sphfoam.engine.plan import missing_dimension
+
+            for family, mdl in sph.items():
+                why = missing_dimension(mdl, 3)
+                if why is not None:
+                    problems.append(Problem(SPH_PROPERTIES, f"{family}.type", why))
         # a model that works only with some choices of another family says so
         for family, mdl in sph.items():
             check = getattr(mdl, "selection_problems", None)
@@ -174,7 +193,11 @@ class Case:
         for name, spec in self.control.functions.items():
             fo = build_model("functionObject", spec, FILES["controlDict"][0],
                              f"functions.{name}", problems)
-            if fo is not None:
+            if fo is not None and self.dimension not in getattr(fo, "dims", (2,)):
+                problems.append(Problem(FILES["controlDict"][0], f"functions.{name}.type",
+                                        f"functionObject {fo.name!r} has no "
+                                        f"{self.dimension}-D form"))
+            elif fo is not None:
                 fo.object_name = name
                 functions[name] = fo
         motions = {}
@@ -206,14 +229,12 @@ class Case:
         pd = self.particles
         kernel = self.models.sph["kernel"]
         h = kernel.h(pd.dx)
-        heights = []
-        for region in pd.fluid.values():
-            ys = [region.min[1], region.max[1]] if region.type == "box" else \
-                [p[1] for p in region.points]
-            heights.append(max(ys) - min(ys))
+        from sphfoam.case.geometry import vertical_extent
+
         ctx = CaseContext(dx=pd.dx, h=h, rho0=self.transport.rho0, nu=self.transport.nu,
-                          g=self.gravity, fluid_height=max(heights),
-                          support=kernel.support_radius(h))
+                          g=self.gravity, fluid_height=max(vertical_extent(r, pd.dimension)
+                                                           for r in pd.fluid.values()),
+                          support=kernel.support_radius(h), dim=pd.dimension)
         c0 = self.models.sph["equationOfState"].c0(ctx)
         return CaseContext(**{**ctx.__dict__, "c0": c0})
 

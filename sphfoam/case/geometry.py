@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sphfoam.case.schemas import BoxRegion, BoxWalls, MeshWalls, ParticleDict, SlopeWalls
+from sphfoam.case.schemas import (BlockWalls, BoxRegion, BoxWalls, MeshWalls, ParticleDict,
+                                  SlopeWalls)
 
 #: how far short of a whole number of spacings (in spacings) a length may fall and still get
 #: its last particle: a dx typed with a few digits (0.4166667 for d/24) makes a 200 m box
@@ -72,6 +73,10 @@ def polylines_of(region) -> list[tuple[list[tuple[float, float]], str]]:
         if cur:
             chains.append(cur)
         return [(c, "right") for c in chains]
+    if isinstance(region, BlockWalls):
+        (x0, y0), (x1, y1) = region.min, region.max
+        # counter-clockwise around the block: the solid lies on the left
+        return [([(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)], "left")]
     if isinstance(region, SlopeWalls):
         ang = math.radians(region.angle)
         x0, y0 = region.start
@@ -83,8 +88,11 @@ def polylines_of(region) -> list[tuple[list[tuple[float, float]], str]]:
 
 
 def segments_of(pd: ParticleDict) -> list[Segment]:
-    """All wall segments of a case, normals into the fluid."""
+    """All wall segments of a 2-D case, normals into the fluid (none in 3-D: its walls are
+    layers of particles, sphfoam.case.solids)."""
     segs: list[Segment] = []
+    if pd.dimension == 3:
+        return segs
     for patch, region in enumerate(pd.walls.values()):
         for pts, side in polylines_of(region):
             # the normal into the solid is the left normal (-ty, tx) if the solid is on the left
@@ -206,6 +214,19 @@ def default_domain(pd: ParticleDict):
     """
     if pd.domain is not None:
         return pd.domain.min, pd.domain.max
+    if pd.dimension == 3:
+        from sphfoam.case.solids import bounds
+
+        boxes = [bounds(r) for r in pd.fluid.values()]
+        for w in pd.walls.values():
+            lo, hi = bounds(w)
+            boxes.append((lo - w.layers * pd.dx, hi + w.layers * pd.dx))
+        lo = np.min([b[0] for b in boxes], axis=0)
+        hi = np.max([b[1] for b in boxes], axis=0)
+        margin = 10 * pd.dx
+        top = hi[2] + 0.5 * (hi[2] - lo[2]) + margin
+        return (tuple(float(v) for v in lo - margin),
+                (float(hi[0] + margin), float(hi[1] + margin), float(top)))
     pts = []
     for r in pd.fluid.values():
         pts += [r.min, r.max] if isinstance(r, BoxRegion) else list(r.points)
@@ -218,3 +239,16 @@ def default_domain(pd: ParticleDict):
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     margin = 10 * pd.dx
     return (lo[0] - margin, lo[1] - margin), (hi[0] + margin, hi[1] + 0.5 * (hi[1] - lo[1]) + margin)
+
+
+def vertical_extent(region, dim: int = 2) -> float:
+    """Height of a fluid region along the vertical (y in 2-D, z in 3-D), for the v_max
+    estimates of the equation of state."""
+    if dim == 3:
+        from sphfoam.case.solids import bounds
+
+        lo, hi = bounds(region)
+        return float(hi[2] - lo[2])
+    ys = [region.min[1], region.max[1]] if isinstance(region, BoxRegion) else \
+        [p[1] for p in region.points]
+    return max(ys) - min(ys)

@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, field_validator,
-                      model_validator)
+from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr,
+                      ValidationInfo, field_validator, model_validator)
 
 from sphfoam.case.foamdict import DimensionSet
 
@@ -28,12 +28,37 @@ def _vector2(v: Any) -> tuple[float, float]:
     if isinstance(v, (list, tuple)) and len(v) in (2, 3) and all(
             isinstance(c, (int, float)) for c in v):
         if len(v) == 3 and v[2] != 0:
-            raise ValueError("sphfoam is two-dimensional (x, y): the z component must be 0")
+            raise ValueError("a 2-D case's vectors are (x y), z = 0: a 3-D case sets "
+                             "`dimension 3;` in system/particleDict")
         return (float(v[0]), float(v[1]))
     raise ValueError(f"expected a vector (x y), got {v!r}")
 
 
 Vector2 = Annotated[tuple[float, float], BeforeValidator(_vector2)]
+
+
+def case_dimension(info: ValidationInfo | None) -> int:
+    """The case's dimension a dictionary is validated for (``system/particleDict``
+    ``dimension``, passed as the validation context ``{"dim": 2 | 3}``; 2 without one)."""
+    ctx = getattr(info, "context", None) or {}
+    return int(ctx.get("dim", 2))
+
+
+def _vector(v: Any, info: ValidationInfo) -> tuple[float, ...]:
+    """A point or vector of the case's dimension: (x y) in 2-D (or (x y 0), as OpenFOAM
+    writes a 2-D case's vectors), (x y z) in 3-D."""
+    dim = case_dimension(info)
+    if dim == 2:
+        return _vector2(v)
+    if isinstance(v, (list, tuple)) and len(v) == 3 and all(
+            isinstance(c, (int, float)) and not isinstance(c, bool) for c in v):
+        return (float(v[0]), float(v[1]), float(v[2]))
+    raise ValueError(f"expected a vector (x y z) in a 3-D case (system/particleDict "
+                     f"dimension 3), got {v!r}")
+
+
+#: a point or vector with the case's dimension's components (x y) or (x y z)
+Vector = Annotated[tuple[float, ...], BeforeValidator(_vector)]
 
 
 def dimensioned(dims: tuple[int, ...]):
@@ -210,7 +235,7 @@ class TransportProperties(Strict):
 
 class Gravity(Strict):
     dimensions: DimensionSet | None = None
-    value: Vector2
+    value: Vector = Field(description="(gx gy) in 2-D, y up; (gx gy gz) in 3-D, z up")
 
     @field_validator("dimensions", mode="before")
     @classmethod
@@ -275,17 +300,39 @@ _GRID_DOC = ("{ origin (x y); angle a; }: fill the region on a lattice rotated b
              "grid anchored at the region's lower-left corner")
 
 
+def _axes(n: int) -> str:
+    return "x and y" if n == 2 else "x, y and z"
+
+
+def _check_order(lo, hi, what: str) -> None:
+    if not all(b > a for a, b in zip(lo, hi)):
+        raise ValueError(f"{what} max {hi} must exceed min {lo} in {_axes(len(lo))}")
+
+
+def _two_dimensional(what: str, info: ValidationInfo, instead: str) -> None:
+    """Refuse, by name, an entry that has no 3-D form."""
+    if case_dimension(info) == 3:
+        raise ValueError(f"{what} is two-dimensional: a 3-D case uses {instead}")
+
+
+def _three_dimensional(what: str, info: ValidationInfo) -> None:
+    if case_dimension(info) != 3:
+        raise ValueError(f"{what} is a 3-D shape: set `dimension 3;` in system/particleDict "
+                         "(and give every point as (x y z))")
+
+
 class BoxRegion(Strict):
     type: Literal["box"]
-    min: Vector2
-    max: Vector2
-    grid: Grid | None = Field(None, description=_GRID_DOC)
+    min: Vector
+    max: Vector
+    grid: Grid | None = Field(None, description=_GRID_DOC + " (2-D only)")
     clipToWalls: bool = Field(False, description=_CLIP_DOC)
 
     @model_validator(mode="after")
-    def _order(self):
-        if not (self.max[0] > self.min[0] and self.max[1] > self.min[1]):
-            raise ValueError(f"box max {self.max} must exceed min {self.min} in x and y")
+    def _order(self, info: ValidationInfo):
+        _check_order(self.min, self.max, "box")
+        if self.grid is not None:
+            _two_dimensional("a rotated grid", info, "the usual grid")
         return self
 
 
@@ -295,8 +342,49 @@ class PolygonRegion(Strict):
     grid: Grid | None = Field(None, description=_GRID_DOC)
     clipToWalls: bool = Field(False, description=_CLIP_DOC)
 
+    @model_validator(mode="after")
+    def _plane(self, info: ValidationInfo):
+        _two_dimensional("a polygon", info, "box, cylinder, extrude or mesh")
+        return self
 
-FluidRegion = Annotated[BoxRegion | PolygonRegion, Field(discriminator="type")]
+
+class CylinderRegion(Strict):
+    """3-D: the inside of the cylinder of ``radius`` around the axis ``point1``-``point2``
+    (OpenFOAM's cylinderToCell), filled on the lattice anchored at the case's origin."""
+
+    type: Literal["cylinder"]
+    point1: Vector = Field(description="centre of one end (m)")
+    point2: Vector = Field(description="centre of the other end (m)")
+    radius: float = Field(gt=0)
+    clipToWalls: bool = Field(False, description=_CLIP_DOC)
+
+    @model_validator(mode="after")
+    def _shape(self, info: ValidationInfo):
+        _three_dimensional("a cylinder", info)
+        if self.point1 == self.point2:
+            raise ValueError("point1 and point2 must differ (the cylinder's axis)")
+        return self
+
+
+class ExtrudeRegion(Strict):
+    """3-D: a 2-D section in the vertical x-z plane, ``points`` ((x z) ...), extruded across
+    y over ``span`` (y0 y1): a flume's section made a basin's."""
+
+    type: Literal["extrude"]
+    points: list[tuple[float, float]] = Field(min_length=3, description="((x z) ...)")
+    span: tuple[float, float] = Field(description="(y0 y1), y1 > y0")
+    clipToWalls: bool = Field(False, description=_CLIP_DOC)
+
+    @model_validator(mode="after")
+    def _shape(self, info: ValidationInfo):
+        _three_dimensional("an extruded section", info)
+        if not self.span[1] > self.span[0]:
+            raise ValueError(f"span {self.span}: y1 must exceed y0")
+        return self
+
+
+FluidRegion = Annotated[BoxRegion | PolygonRegion | CylinderRegion | ExtrudeRegion,
+                        Field(discriminator="type")]
 
 
 _MOTION_DOC = ("prescribed motion of this wall, { type <motion>; ... } (sphfoam models "
@@ -308,26 +396,93 @@ class _Wall(Strict):
 
     @model_validator(mode="after")
     def _one_motion(self):
-        if self.motion is not None and tuple(getattr(self, "velocity", (0.0, 0.0))) != (0.0, 0.0):
+        if self.motion is not None and any(getattr(self, "velocity", ())):
             raise ValueError("give either a constant velocity or a motion, not both")
         return self
+
+
+#: a tank's sides: 2-D, y up: bottom/top y, left/right x; 3-D, z up: bottom/top z,
+#: left/right x, front/back y
+FACES = ("top", "bottom", "left", "right", "front", "back")
 
 
 class BoxWalls(_Wall):
     """A rectangular tank: wall rows outside ``min``..``max``; ``open`` sides get none."""
 
     type: Literal["box"]
-    min: Vector2
-    max: Vector2
+    min: Vector
+    max: Vector
     layers: int = Field(3, ge=1, le=10, description="rows of wall particles")
-    velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s), e.g. "
-                              "the sliding plate of a Couette flow")
-    open: list[Literal["top", "bottom", "left", "right"]] = Field(default_factory=lambda: ["top"])
+    velocity: Vector = Field((0.0, 0.0), description="constant wall velocity (m/s), e.g. "
+                             "the sliding plate of a Couette flow (2-D)")
+    open: list[Literal["top", "bottom", "left", "right", "front", "back"]] = Field(
+        default_factory=lambda: ["top"], description=(
+            "sides without wall rows: 2-D (y up) top, bottom, left, right; 3-D (z up) also "
+            "front (y min) and back (y max)"))
 
     @field_validator("open", mode="before")
     @classmethod
     def _one(cls, v):
         return [v] if isinstance(v, str) else v
+
+    @model_validator(mode="after")
+    def _shape(self, info: ValidationInfo):
+        _check_order(self.min, self.max, "box")
+        if case_dimension(info) == 2 and {"front", "back"} & set(self.open):
+            raise ValueError("front and back are the y sides of a 3-D tank: a 2-D tank's "
+                             "sides are top, bottom, left and right")
+        return self
+
+
+class BlockWalls(_Wall):
+    """A solid box (an obstacle): ``layers`` of wall particles inside its faces, fluid
+    outside. 2-D or 3-D."""
+
+    type: Literal["block"]
+    min: Vector
+    max: Vector
+    layers: int = Field(3, ge=1, le=10, description="rows of wall particles inside the faces")
+
+    @model_validator(mode="after")
+    def _shape(self, info: ValidationInfo):
+        _check_order(self.min, self.max, "block")
+        return self
+
+
+class CylinderWalls(_Wall):
+    """3-D: a solid cylinder (a pile, a column) of ``radius`` around ``point1``-``point2``:
+    ``layers`` of wall particles inside its surface, fluid outside."""
+
+    type: Literal["cylinder"]
+    point1: Vector = Field(description="centre of one end (m)")
+    point2: Vector = Field(description="centre of the other end (m)")
+    radius: float = Field(gt=0)
+    layers: int = Field(3, ge=1, le=10, description="layers of wall particles")
+
+    @model_validator(mode="after")
+    def _shape(self, info: ValidationInfo):
+        _three_dimensional("a cylinder", info)
+        if self.point1 == self.point2:
+            raise ValueError("point1 and point2 must differ (the cylinder's axis)")
+        return self
+
+
+class ExtrudeWalls(_Wall):
+    """3-D: a solid 2-D section in the x-z plane, ``points`` ((x z) ...), extruded across y
+    over ``span`` (y0 y1) (a beach's slope, a breakwater): ``layers`` of wall particles
+    inside its surface, fluid outside."""
+
+    type: Literal["extrude"]
+    points: list[tuple[float, float]] = Field(min_length=3, description="((x z) ...)")
+    span: tuple[float, float] = Field(description="(y0 y1), y1 > y0")
+    layers: int = Field(3, ge=1, le=10, description="layers of wall particles")
+
+    @model_validator(mode="after")
+    def _shape(self, info: ValidationInfo):
+        _three_dimensional("an extruded section", info)
+        if not self.span[1] > self.span[0]:
+            raise ValueError(f"span {self.span}: y1 must exceed y0")
+        return self
 
 
 class PolylineWalls(_Wall):
@@ -340,6 +495,11 @@ class PolylineWalls(_Wall):
                                            "travel the solid lies on")
     velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
 
+    @model_validator(mode="after")
+    def _plane(self, info: ValidationInfo):
+        _two_dimensional("a polyline", info, "box, block, cylinder or extrude walls")
+        return self
+
 
 class SlopeWalls(_Wall):
     """A plane slope (e.g. the 5 degree beach of T ch. 5) rising from ``start`` at ``angle``
@@ -351,6 +511,11 @@ class SlopeWalls(_Wall):
     length: float = Field(gt=0, description="length along the slope (m)")
     layers: int = Field(3, ge=1, le=10, description="rows of wall particles")
     velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
+
+    @model_validator(mode="after")
+    def _plane(self, info: ValidationInfo):
+        _two_dimensional("a slope", info, "extrude walls (the slope's section across y)")
+        return self
 
 
 class MeshWalls(_Wall):
@@ -374,6 +539,12 @@ class MeshWalls(_Wall):
     velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
     _polylines: list | None = PrivateAttr(None)
 
+    @model_validator(mode="after")
+    def _plane(self, info: ValidationInfo):
+        _two_dimensional("a mesh wall (its section by a plane)", info,
+                         "box, block, cylinder or extrude walls")
+        return self
+
     def load(self, case_dir) -> None:
         """Read the mesh (relative to ``case_dir``); raises MeshWallError with the reason."""
         from pathlib import Path
@@ -392,22 +563,25 @@ class MeshWalls(_Wall):
         return self._polylines
 
 
-WallRegion = Annotated[BoxWalls | PolylineWalls | SlopeWalls | MeshWalls,
-                       Field(discriminator="type")]
+WallRegion = Annotated[BoxWalls | BlockWalls | CylinderWalls | ExtrudeWalls | PolylineWalls
+                       | SlopeWalls | MeshWalls, Field(discriminator="type")]
 
 
 class Domain(Strict):
-    min: Vector2
-    max: Vector2
-    periodic: list[Literal["x", "y"]] = Field(default_factory=list, description=(
+    min: Vector
+    max: Vector
+    periodic: list[Literal["x", "y", "z"]] = Field(default_factory=list, description=(
         "periodic axes: a particle leaving through max re-enters through min, and pairs "
-        "interact across the seam (channel flows)"))
+        "interact across the seam (channel flows; a narrow 3-D flume periodic across y)"))
 
     @model_validator(mode="after")
-    def _order(self):
-        if not (self.max[0] > self.min[0] and self.max[1] > self.min[1]):
-            raise ValueError(f"domain max {self.max} must exceed min {self.min} in x and y "
-                             "(an empty domain holds no particle)")
+    def _order(self, info: ValidationInfo):
+        if not all(b > a for a, b in zip(self.min, self.max)):
+            raise ValueError(f"domain max {self.max} must exceed min {self.min} in "
+                             f"{_axes(len(self.min))} (an empty domain holds no particle)")
+        if "z" in self.periodic and case_dimension(info) == 2:
+            raise ValueError("z is periodic only in a 3-D case (system/particleDict "
+                             "dimension 3)")
         return self
 
     @field_validator("periodic", mode="before")
@@ -417,6 +591,9 @@ class Domain(Strict):
 
 
 class ParticleDict(Strict):
+    dimension: Literal[2, 3] = Field(2, description=(
+        "2: x, y with y up; 3: x, y, z with z up. Every point and vector of the case "
+        "(here and constant/g) then has this many components"))
     dx: float = Field(gt=0, description="initial particle spacing")
     fluid: dict[str, FluidRegion] = Field(min_length=1)
     walls: dict[str, WallRegion] = Field(default_factory=dict)

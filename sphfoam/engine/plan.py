@@ -87,6 +87,26 @@ class Selection:
         return [getattr(m, name) for m in self.models() if m.implements(name)]
 
 
+#: the run-time hooks a model may implement (sphfoam.engine.context.RunContext)
+HOOKS = ("attach", "before_neighbours", "add_particles", "after_sort", "before_evaluation",
+         "after_rates", "after_density_rate", "walls_moved", "after_step", "keeps_neighbours",
+         "advection_velocity")
+
+
+def missing_dimension(model, dim: int) -> str | None:
+    """Why ``model`` cannot run in ``dim`` dimensions, naming it (None when it can): a term
+    with no code for ``dim``, or run-time hooks written for two dimensions only."""
+    for t in model.terms():
+        if dim not in t.dims:
+            return (f"{model.family} {model.name!r} has no {dim}-D form (term {t.name!r} has "
+                    f"code for {', '.join(f'{d}-D' for d in t.dims) or 'no dimension'})")
+    hooks = [h for h in HOOKS if model.implements(h)]
+    if hooks and dim not in getattr(model, "hook_dims", (2,)):
+        return (f"{model.family} {model.name!r} has no {dim}-D form (its run-time hooks "
+                f"{', '.join(hooks)} are two-dimensional)")
+    return None
+
+
 class Plan:
     """The selected models' terms, checked, and what each loop of the pipeline runs."""
 

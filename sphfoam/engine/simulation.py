@@ -14,6 +14,7 @@ from numba import njit, prange
 
 from sphfoam.engine.context import RunContext
 from sphfoam.engine.neighbours import REDUCTION_CHUNKS, CellList, displacement_check, permute
+from sphfoam.engine.plan import missing_dimension
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.stepping import StepContext, advance
 from sphfoam.engine.timestep import stable_time_step_into
@@ -35,13 +36,9 @@ def _refuse_two_dimensional_hooks(sel, motions) -> None:
     written for two (mirror ghosts, Adami's wall velocity, the wall law, XSPH's and the
     shiftings' advection), and prescribed wall motion (not yet in three dimensions)."""
     for m in sel.models():
-        hooks = [h for h in ("attach", "before_neighbours", "add_particles", "after_sort",
-                             "before_evaluation", "after_rates", "after_density_rate",
-                             "walls_moved", "after_step", "keeps_neighbours",
-                             "advection_velocity") if m.implements(h)]
-        if hooks and 3 not in getattr(m, "hook_dims", (2,)):
-            raise ValueError(f"{m.family} {m.name!r} has no 3-D form (its run-time hooks "
-                             f"{', '.join(hooks)} are two-dimensional)")
+        why = missing_dimension(m, 3)
+        if why is not None:
+            raise ValueError(why)
     if motions:
         raise ValueError("prescribed wall motion has no 3-D form yet")
 
@@ -409,6 +406,11 @@ class Simulation:
         """Pressure from the current density (for output)."""
         self.eos()
         return self.state.p.copy()
+
+    @property
+    def energy_unit(self) -> str:
+        """J per metre of span in 2-D, J in 3-D (the mass is per unit span in 2-D)."""
+        return "J/m" if self.state.dim == 2 else "J"
 
     def kinetic_energy(self) -> float:
         st = self.state

@@ -349,7 +349,7 @@ def write_state(
         try:
             if name == "positions":
                 write_positions(tmp, a, fmt=fmt, precision=precision, location=location)
-            elif a.ndim == 2 and a.shape[1] == 2 and a.dtype.kind == "f":
+            elif a.ndim == 2 and a.shape[1] in (2, 3) and a.dtype.kind == "f":
                 write_vectors(tmp, a, fmt=fmt, precision=precision, location=location, name=name)
             else:
                 write_field(tmp, a, fmt=fmt, precision=precision, location=location, name=name)
@@ -374,17 +374,25 @@ def _in_plane(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def read_state(time_dir: str | Path) -> dict[str, np.ndarray]:
+def read_state(time_dir: str | Path, dim: int | None = None) -> dict[str, np.ndarray]:
     """Read every particle field of a time directory into ``{name: array}``.
 
-    Positions and vectors come back as in-plane (N, 2) arrays whether they were
-    written as 3-vectors with z = 0 (the OpenFOAM layout) or as ``vector2DField``
-    (cases written by earlier sphfoam versions).
+    A 2-D case's positions and vectors come back as in-plane (N, 2) arrays whether they
+    were written as 3-vectors with z = 0 (the OpenFOAM layout) or as ``vector2DField``
+    (cases written by earlier sphfoam versions); a 3-D case's as (N, 3). ``dim`` (the
+    case's ``dimension``) decides; without it, positions with any z != 0 are 3-D.
     """
     cloud = Path(time_dir) / CLOUD_DIR
     if not cloud.is_dir():
         raise FileNotFoundError(f"no particle data: directory {cloud} does not exist")
-    return {p.name: _in_plane(read_field(p)) for p in _field_files(cloud)}
+    raw = {p.name: read_field(p) for p in _field_files(cloud)}
+    pos = raw.get("positions")
+    if dim is None:
+        dim = 3 if pos is not None and pos.ndim == 2 and pos.shape[1] == 3 \
+            and pos[:, 2].any() else 2
+    if dim == 3:
+        return raw
+    return {k: _in_plane(a) for k, a in raw.items()}
 
 
 def field_header(path: str | Path) -> dict[str, str]:

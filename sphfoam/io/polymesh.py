@@ -41,11 +41,16 @@ def _header(cls: str, name: str, note: str | None = None) -> str:
 
 def write_poly_mesh(case_dir: str | Path, lo, hi, thickness: float) -> Path:
     """Write ``constant/polyMesh`` (points, faces, owner, neighbour, boundary): one cell
-    covering ``lo``..``hi`` in x, y and ``-thickness/2``..``thickness/2`` in z."""
+    covering ``lo``..``hi`` in x, y and ``-thickness/2``..``thickness/2`` in z (a 2-D
+    case), or ``lo``..``hi`` (a 3-D case: ``lo``, ``hi`` with three components)."""
     mesh = Path(case_dir) / "constant" / "polyMesh"
     mesh.mkdir(parents=True, exist_ok=True)
-    (x0, y0), (x1, y1) = lo, hi
-    z0, z1 = -0.5 * thickness, 0.5 * thickness
+    three = len(lo) == 3
+    if three:                      # a 3-D case: the cell spans the domain in z too
+        (x0, y0, z0), (x1, y1, z1) = lo, hi
+    else:
+        (x0, y0), (x1, y1) = lo, hi
+        z0, z1 = -0.5 * thickness, 0.5 * thickness
     pts = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0),
            (x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)]
     files = {
@@ -57,7 +62,7 @@ def write_poly_mesh(case_dir: str | Path, lo, hi, thickness: float) -> Path:
                   "6\n(\n" + "0\n" * 6 + ")\n"),
         "neighbour": ("labelList", "nPoints:8 nCells:1 nFaces:6 nInternalFaces:0",
                       "0\n(\n)\n"),
-        "boundary": ("polyBoundaryMesh", None,
+        "boundary": ("polyBoundaryMesh", None, _SIDES_3D if three else
                      "2\n(\n"
                      "    sides\n    {\n        type            patch;\n"
                      "        nFaces          4;\n        startFace       0;\n    }\n"
@@ -69,6 +74,11 @@ def write_poly_mesh(case_dir: str | Path, lo, hi, thickness: float) -> Path:
     for name, (cls, note, body) in files.items():
         (mesh / name).write_text(_header(cls, name, note) + body)
     return mesh
+
+
+#: a 3-D case's one cell: all six faces are the patch ``sides``
+_SIDES_3D = ("1\n(\n    sides\n    {\n        type            patch;\n"
+             "        nFaces          6;\n        startFace       0;\n    }\n)\n")
 
 
 def foam_file(case_dir: str | Path) -> Path:

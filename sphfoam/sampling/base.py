@@ -25,6 +25,8 @@ class FunctionObject(Model, abc.ABC):
     family = "functionObject"
     object_name: str = ""
     columns: tuple[str, ...] = ()
+    #: the case dimensions it samples (a 3-D case refuses one without 3 by name)
+    dims: tuple[int, ...] = (2,)
 
     def start(self, case, ctx, start_time_name: str) -> None:
         self.case, self.ctx = case, ctx

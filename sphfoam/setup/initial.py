@@ -35,6 +35,14 @@ def generate_case(case: Case) -> ParticleState:
     """The particles of the case's system/particleDict for its boundary model and motions,
     hydrostatic and at rest (nothing written)."""
     sph = case.models.sph
+    if case.dimension == 3:
+        from sphfoam.setup.particles3d import generate3d
+
+        return generate3d(case.particles, case.context, sph["equationOfState"],
+                          boundary=sph["boundary"], moving=bool(case.models.motions),
+                          waves=list(case.waves.values()),
+                          fields=[f for m in sph.values()
+                                  for f in getattr(m, "particle_fields", ())])
     return generate(case.particles, case.context, sph["equationOfState"],
                     boundary=sph["boundary"], support_radius=case.context.support,
                     moving=bool(case.models.motions), waves=list(case.waves.values()),

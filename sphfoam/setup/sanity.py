@@ -93,6 +93,8 @@ def estimate(pd: ParticleDict, support: float = 2.0, hdx: float = 1.3) -> tuple[
 def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", support: float = 2.0,
                       hdx: float = 1.3, memory: int | None = None) -> list[Problem]:
     """What is wrong with the geometry of ``pd`` (empty when it makes sense)."""
+    if pd.dimension == 3:
+        return _problems_3d(pd, file, support, hdx, memory)
     problems: list[Problem] = []
     dx = pd.dx
     for name, r in pd.fluid.items():
@@ -145,6 +147,65 @@ def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", suppo
         need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
     except (ZeroDivisionError, OverflowError):
         n = cells = need = math.inf
+    memory = machine_memory() if memory is None else memory
+    if not math.isfinite(need) or (memory is not None and need > MEMORY_FRACTION * memory):
+        have = f"this machine has {_size(memory)}" if memory else "more than is available"
+        problems.append(Problem(file, "dx", f"dx = {dx:g} m gives about {n:.3g} particles and "
+                                f"{cells:.3g} neighbour-grid cells, needing about "
+                                f"{_size(need)} of memory; {have}. Use a larger dx (or a "
+                                "smaller domain)"))
+    return problems
+
+
+_FACE_WORDS = {"left": (0, 0, "x <"), "right": (0, 1, "x >"), "front": (1, 0, "y <"),
+               "back": (1, 1, "y >"), "bottom": (2, 0, "z <"), "top": (2, 1, "z >")}
+
+
+def _problems_3d(pd: ParticleDict, file: str, support: float, hdx: float,
+                 memory: int | None) -> list[Problem]:
+    """The 3-D geometry's problems: a fluid region thinner than dx or outside its tank's
+    closed sides or the domain, and the particle and memory budget (particles: fluid
+    volume / dx^3 plus the walls' surface x layers / dx^2, from their boxes)."""
+    from sphfoam.case.geometry import default_domain
+    from sphfoam.case.solids import bounds
+
+    problems: list[Problem] = []
+    dx = pd.dx
+    tol = 1e-9 * max(1.0, dx)
+    tanks = {n: w for n, w in pd.walls.items() if isinstance(w, BoxWalls)}
+    n = 0.0
+    for name, r in pd.fluid.items():
+        lo, hi = bounds(r)
+        n += float(np.prod(hi - lo)) / dx ** 3
+        if float(min(hi - lo)) < dx * (1 - 1e-9):
+            problems.append(Problem(file, f"fluid.{name}", f"is {float(min(hi - lo)):g} m "
+                                    f"across, less than dx = {dx:g} m: it holds no particle"))
+        for wname, w in tanks.items():
+            sides = [f"{word} {(w.min, w.max)[hi_side][axis]:g}"
+                     for face, (axis, hi_side, word) in _FACE_WORDS.items()
+                     if face not in w.open and (hi[axis] > w.max[axis] + tol if hi_side
+                                                else lo[axis] < w.min[axis] - tol)]
+            if sides:
+                problems.append(Problem(file, f"fluid.{name}", "lies (partly) outside the "
+                                        f"tank walls.{wname}: {', '.join(sides)}. Its "
+                                        "particles would start inside or behind the wall "
+                                        "layers"))
+        if pd.domain is not None:
+            dlo, dhi = np.asarray(pd.domain.min), np.asarray(pd.domain.max)
+            if np.any(lo < dlo) or np.any(hi > dhi):
+                problems.append(Problem(file, f"fluid.{name}", f"reaches outside domain "
+                                        f"{tuple(dlo)}..{tuple(dhi)}: its particles there "
+                                        "would be removed at the first step"))
+    if problems:
+        return problems
+    for w in pd.walls.values():
+        lo, hi = bounds(w)
+        e = hi - lo
+        n += 2.0 * (e[0] * e[1] + e[1] * e[2] + e[0] * e[2]) * w.layers / dx ** 2
+    lo, hi = default_domain(pd)
+    cell = support * hdx * dx
+    cells = float(np.prod([max(b - a, cell) / cell + 1 for a, b in zip(lo, hi)]))
+    need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
     memory = machine_memory() if memory is None else memory
     if not math.isfinite(need) or (memory is not None and need > MEMORY_FRACTION * memory):
         have = f"this machine has {_size(memory)}" if memory else "more than is available"

@@ -79,9 +79,9 @@ def settle(case, state: ParticleState, log=print) -> tuple[ParticleState, int, f
     wall = state.kind == WALL
     order = np.argsort(state.id[wall])
     ids_set = state.id[wall][order]
-    u_set, v_set = state.u[wall][order], state.v[wall][order]
-    state.u[wall] = 0.0
-    state.v[wall] = 0.0
+    vel_set = [c[wall][order] for c in state.velocities]
+    for c in state.velocities:
+        c[wall] = 0.0
     sim = build_simulation(case, state, backend="cpu")   # settling runs on the host
     sim.motions = {}                 # paddles and moving walls stay where they were set up
     sim.time, sim.step_index = 0.0, 0
@@ -111,7 +111,7 @@ def settle(case, state: ParticleState, log=print) -> tuple[ParticleState, int, f
             steps += 1
             if sim.time >= tenth * t_end / 10 - eps or sim.time >= t_end - eps:
                 log(f"settling: time {sim.time:.6g} of {t_end:g} s (step {steps}, dt {dt:.4g}, "
-                    f"KE {sim.kinetic_energy():.4g} J/m)")
+                    f"KE {sim.kinetic_energy():.4g} {sim.energy_unit})")
                 while tenth * t_end / 10 - eps <= sim.time:
                     tenth += 1
             diagnosis = monitor.check(sim, dt, landed)
@@ -125,11 +125,12 @@ def settle(case, state: ParticleState, log=print) -> tuple[ParticleState, int, f
         pool.end()
     st = sim.state
     fluid = st.kind == FLUID
-    st.u[fluid] = 0.0
-    st.v[fluid] = 0.0
+    for c in st.velocities:
+        c[fluid] = 0.0
     wall = np.flatnonzero(st.kind == WALL)
     if ids_set.size and wall.size:    # the set-up wall velocities back (the sim re-sorts)
         k = np.clip(np.searchsorted(ids_set, st.id[wall]), 0, ids_set.size - 1)
         same = ids_set[k] == st.id[wall]
-        st.u[wall[same]], st.v[wall[same]] = u_set[k[same]], v_set[k[same]]
+        for c, c_set in zip(st.velocities, vel_set):
+            c[wall[same]] = c_set[k[same]]
     return st, steps, sim.last_dt

@@ -198,6 +198,8 @@ class CudaSimulation:
     def invalidate_neighbours(self):
         self._ref = None
 
+    energy_unit = "J/m"
+
     def kinetic_energy(self) -> float:
         st = self.state
         f = st.kind == FLUID

@@ -1,0 +1,221 @@
+"""Particle generation in three dimensions (``system/particleDict`` ``dimension 3``; z up).
+
+As in 2-D (sphfoam.setup.particles): fluid particles sit at the centres of a cubic lattice
+of spacing dx, so a block holds its volume / dx^3 particles and its surface lies dx/2 beyond
+the outermost layer; wall particles sit at the lattice centres ``layers`` deep behind a
+wall (outside a tank's closed sides; inside a solid's surface: a block, a cylinder, an
+extruded section, sphfoam.case.solids), DualSPHysics' layout of boundary particles. Fluid
+keeps dx/2 from every wall particle and from every solid's surface. The initial state is
+hydrostatic: p = rho0 g_down (eta - z), eta the top of each (x, y) column plus dx/2 (wall
+particles: their nearest fluid particle's), rho from the inverse of the equation of state;
+masses rho dx^3. Solitary waves (``constant/waveProperties``) on a box of still water are
+the 2-D flume's columns (sphfoam.setup.waves) in the x-z plane, repeated across y.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from sphfoam.case.errors import CaseError
+from sphfoam.case.geometry import LATTICE_TOLERANCE, lattice_count
+from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
+from sphfoam.case.solids import bounds, signed_distance, tank_wall_depth
+from sphfoam.engine.state import FLUID, WALL, ParticleState
+from sphfoam.setup.particles import wall_pressure
+from sphfoam.setup.waves import fields as wave_fields
+from sphfoam.setup.waves import surface as wave_surface
+from sphfoam.setup.waves import wave_columns
+
+PD = "system/particleDict"
+
+
+def lattice(lo, hi, dx, anchor=None) -> np.ndarray:
+    """Cell centres anchor + (i + 1/2) dx of the cubic lattice that lie in [lo, hi] (n, 3);
+    ``anchor`` defaults to ``lo``."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    a = lo if anchor is None else np.asarray(anchor, float)
+    first = np.ceil((lo - a) / dx - 0.5 - LATTICE_TOLERANCE)
+    axes = []
+    for k in range(3):
+        n = lattice_count(hi[k] - (a[k] + first[k] * dx), dx)
+        axes.append(a[k] + dx * (first[k] + np.arange(n) + 0.5))
+    X, Y, Z = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+
+
+def case_anchor(pd: ParticleDict) -> np.ndarray:
+    """Where the case's lattice is anchored: the first tank's corner, else the first box of
+    fluid's, else the origin (cylinders and extruded sections are filled on it)."""
+    for w in pd.walls.values():
+        if isinstance(w, BoxWalls):
+            return np.asarray(w.min, float)
+    for r in pd.fluid.values():
+        if isinstance(r, BoxRegion):
+            return np.asarray(r.min, float)
+    return np.zeros(3)
+
+
+def fluid_points(region, dx, anchor) -> np.ndarray:
+    """Lattice centres inside a fluid region (a box on its own lattice, as in 2-D)."""
+    if isinstance(region, BoxRegion):
+        return lattice(region.min, region.max, dx)
+    lo, hi = bounds(region)
+    p = lattice(lo, hi, dx, anchor)
+    return p[signed_distance(region, p) < 0.0]
+
+
+def wall_points(wall, dx, anchor) -> tuple[np.ndarray, np.ndarray]:
+    """Wall particles of a wall entry ``layers`` deep and their distance behind the wall
+    surface."""
+    L = wall.layers * dx
+    if isinstance(wall, BoxWalls):
+        lo, hi = np.asarray(wall.min, float), np.asarray(wall.max, float)
+        p = lattice(lo - L, hi + L, dx, anchor=lo)
+        d = tank_wall_depth(wall, p)
+        keep = (d > 0.0) & (d < np.inf)
+        return p[keep], d[keep]
+    lo, hi = bounds(wall)
+    anchor = np.asarray(wall.min, float) if hasattr(wall, "min") else anchor
+    p = lattice(lo, hi, dx, anchor)
+    d = -signed_distance(wall, p)
+    keep = (d > 0.0) & (d <= L * (1 + LATTICE_TOLERANCE))
+    return p[keep], d[keep]
+
+
+def _first_of_duplicates(p: np.ndarray, r: float) -> np.ndarray:
+    """Mask keeping the first of any points closer than ``r`` (walls of two entries)."""
+    keep = np.ones(len(p), bool)
+    if len(p) == 0:
+        return keep
+    pairs = cKDTree(p).query_pairs(r, output_type="ndarray")
+    for i, j in pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))] if len(pairs) else ():
+        if keep[i]:
+            keep[j] = False
+    return keep
+
+
+def seam_keep(p: np.ndarray, region: np.ndarray, r: float) -> np.ndarray:
+    """Of two particles of different regions closer than ``r``, the later region's goes."""
+    keep = np.ones(len(p), bool)
+    if len(p) < 2:
+        return keep
+    pairs = cKDTree(p).query_pairs(r, output_type="ndarray")
+    if len(pairs):
+        i, j = pairs[:, 0], pairs[:, 1]
+        cross = region[i] != region[j]
+        i, j = i[cross], j[cross]
+        keep[np.where(region[i] > region[j], i, j)] = False
+    return keep
+
+
+def local_surface(p: np.ndarray, dx: float) -> np.ndarray:
+    """Free-surface height above each fluid particle: top of its (x, y) column + dx/2."""
+    key = np.floor((p[:, :2] - p[:, :2].min(axis=0)) / dx + 0.5).astype(np.int64)
+    col = np.unique(key, axis=0, return_inverse=True)[1].ravel()
+    top = np.full(col.max() + 1, -np.inf)
+    np.maximum.at(top, col, p[:, 2])
+    return top[col] + 0.5 * dx
+
+
+def _refuse(boundary, moving: bool, fields) -> None:
+    """What the 3-D set-up cannot make, refused by name."""
+    if getattr(boundary, "wall_placement", "rows") == "none":
+        raise CaseError.single("constant/sphProperties", "boundary.type", (
+            f"{boundary.name} has no 3-D form (its walls are lines to mirror across): use "
+            "stationaryGhosts"))
+    lacking = [f for f in tuple(getattr(boundary, "wall_fields", ())) + tuple(fields)
+               if f != "wallDist"]
+    if lacking:
+        raise CaseError.single("constant/sphProperties", "boundary.type", (
+            f"the selected models read the wall field(s) {', '.join(sorted(set(lacking)))}, "
+            "which have no 3-D form: use stationaryGhosts"))
+    if moving:
+        raise CaseError.single(PD, "walls", "prescribed wall motion has no 3-D form yet")
+
+
+def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, waves=(),
+               fields=()) -> ParticleState:
+    """Particles of a 3-D case at rest in hydrostatic equilibrium (see the module)."""
+    _refuse(boundary, moving, fields)
+    dx = pd.dx
+    tol = 1 - LATTICE_TOLERANCE
+    anchor = case_anchor(pd)
+    gmag = float(np.linalg.norm(ctx.g))
+    pieces, spacing, wave_box = [], [], []
+    for name, r in pd.fluid.items():
+        if waves and isinstance(r, BoxRegion):
+            (x0, y0, z0), (x1, y1, z1) = r.min, r.max
+            section = BoxRegion.model_construct(type="box", min=(x0, z0), max=(x1, z1),
+                                                grid=None, clipToWalls=False)
+            xs, zs, dz = wave_columns(section, dx, waves, gmag)
+            ys = y0 + dx * (np.arange(lattice_count(y1 - y0, dx)) + 0.5)
+            p = np.column_stack([np.tile(xs, ys.size), np.repeat(ys, xs.size),
+                                 np.tile(zs, ys.size)])
+            pieces.append(p)
+            spacing.append(np.tile(dz, ys.size))
+            wave_box.append(r)
+        else:
+            p = fluid_points(r, dx, anchor)
+            pieces.append(p)
+            spacing.append(np.full(len(p), dx))
+            wave_box.append(None)
+    pf = np.concatenate(pieces)
+    dzf = np.concatenate(spacing)
+    regf = np.concatenate([np.full(len(q), i) for i, q in enumerate(pieces)])
+    ok = seam_keep(pf, regf, pd.minSpacing * dx)
+    pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
+    walls = list(pd.walls.values())
+    layers = getattr(boundary, "wall_layers", None)
+    if walls:
+        made = [wall_points(w if layers is None else w.model_copy(update={"layers": layers}),
+                            dx, anchor) for w in walls]
+        pw = np.concatenate([m[0] for m in made])
+        dw = np.concatenate([m[1] for m in made])
+        patch = np.concatenate([np.full(len(m[0]), i) for i, m in enumerate(made)])
+        keep = _first_of_duplicates(pw, 0.5 * dx)
+        pw, dw, patch = pw[keep], dw[keep], patch[keep]
+        vel = np.zeros((len(walls), 3))
+        for i, w in enumerate(walls):          # a tank's constant velocity; solids are still
+            v = tuple(getattr(w, "velocity", ()))
+            vel[i, :len(v)] = v
+        vel = vel[patch]
+    else:
+        pw, dw, vel = np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3))
+    if len(pw) and len(pf):      # fluid never overlaps walls: dx/2 from every wall particle
+        d, _ = cKDTree(pw).query(pf)
+        ok = d >= 0.5 * dx * tol
+        pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
+    for w in walls:              # ... and from every solid's surface
+        if not isinstance(w, BoxWalls) and len(pf):
+            ok = signed_distance(w, pf) >= 0.5 * np.minimum(dx, dzf) * tol
+            pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
+    if len(pf) == 0:
+        raise ValueError(f"{PD}: fluid regions produce no particles at this dx")
+    gdown = max(-float(ctx.g[2]), 0.0)      # hydrostatic along -z (z is up in 3-D)
+    eta_f = local_surface(pf, dx)
+    uf = np.zeros((len(pf), 3))
+    p_f = ctx.rho0 * gdown * np.maximum(eta_f - pf[:, 2], 0.0)
+    for i, r in enumerate(wave_box):
+        if r is None:
+            continue
+        sel = regf == i
+        bed, top = r.min[2], r.max[2]
+        x, z = pf[sel, 0], pf[sel, 2]
+        uf[sel, 0], uf[sel, 2], p_f[sel] = wave_fields(x, z, bed, top - bed, waves, gmag,
+                                                       ctx.rho0)
+        eta_f[sel] = top + wave_surface(x, top - bed, waves, gmag)
+    if len(pw):
+        _, nearest = cKDTree(pf).query(pw)
+        p_w = wall_pressure(p_f, pf[:, 2], pw[:, 2], nearest, ctx.rho0 * gdown)
+    else:
+        p_w = np.zeros(0)
+    pos = np.concatenate([pf, pw])
+    vel_all = np.concatenate([uf, vel])
+    p = np.concatenate([p_f, p_w])
+    rho = eos.density(p, ctx)
+    kind = np.concatenate([np.full(len(pf), FLUID), np.full(len(pw), WALL)])
+    dz = np.concatenate([dzf, np.full(len(pw), dx)])
+    extra = {"wallDist": np.concatenate([np.zeros(len(pf)), dw])} if len(pw) else {}
+    return ParticleState(pos[:, 0], pos[:, 1], vel_all[:, 0], vel_all[:, 1], rho,
+                         rho * dx * dx * dz, kind, extra=extra, z=pos[:, 2], w=vel_all[:, 2])
