@@ -22,7 +22,16 @@ def selection(case: Case) -> Selection:
                      adjust_time_step=case.control.adjustTimeStep,
                      periodic_x="x" in periodic, periodic_y="y" in periodic,
                      periodic_z="z" in periodic, precision=case.schemes.precision,
-                     dim=case.dimension)
+                     dim=case.dimension, still_walls=still_walls(case))
+
+
+def still_walls(case: Case) -> bool:
+    """Whether every wall particle keeps velocity 0 all run: no prescribed motion, no
+    constant wall velocity, and a boundary that leaves wall velocities as set up."""
+    walls = case.particles.walls.values()
+    return (bool(getattr(case.models.sph["boundary"], "keeps_wall_velocity", False))
+            and not case.models.motions
+            and not any(any(getattr(w, "velocity", ())) for w in walls))
 
 
 def build_simulation(case: Case, state: ParticleState, backend: str | None = None):
@@ -57,7 +66,8 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
     walls = state.kind == WALL
     missing = [k for k in bnd.wall_fields if k not in state.extra] if walls.any() else []
     if case.models.motions:
-        missing += [k for k in ("patch", "x0", "y0") if k not in state.extra]
+        missing += [k for k in ("patch", "x0", "y0", "z0")[:2 + state.dim]
+                    if k not in state.extra]
     for family, mdl in case.models.sph.items():
         lacking = [k for k in getattr(mdl, "particle_fields", ()) if k not in state.extra]
         if family != "boundary" and walls.any() and lacking and not missing:

@@ -200,3 +200,44 @@ domain {{ min (-0.2 0 -0.2); max (0.8 0.24 0.8); periodic y; }}
     front3 = pos[:, 0].max()
     assert front3 > 0.2 + dx and front2 > 0.2 + dx     # both fronts have moved
     assert abs(front3 - front2) < dx
+
+
+def test_a_3d_piston_paddle_moves_its_block_by_the_wave_makers_stroke(tmp_path):
+    """A block wall with a piston paddle's motion in 3-D: after a few steps its particles
+    sit at their set-up position plus X(t) along the direction and move at X'(t); the other
+    walls have not moved."""
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup.initial import generate_case
+
+    case = _copy(tmp_path)
+    _particle_dict(case, """dimension 3; dx 0.05;
+fluid { water { type box; min (0 0 0); max (1 0.3 0.3); } }
+walls
+{
+    tank   { type box; min (-0.5 0 0); max (1 0.3 0.6); layers 3; open (top left); }
+    paddle
+    {
+        type block; min (-0.15 0 0); max (0 0.3 0.6); layers 3;
+        motion { type pistonPaddle; direction (1 0 0);
+                 waveMaker { type goring; height 0.03; depth 0.3; } }
+    }
+}
+""")
+    c = Case(case)
+    st = generate_case(c)
+    assert {"patch", "x0", "y0", "z0"} <= set(st.extra)
+    sim = build_simulation(c, st)
+    for _ in range(10):
+        sim.step()
+    st = sim.state
+    mot = c.models.motions[1]
+    paddle = st.extra["patch"] == 1
+    tank = st.extra["patch"] == 0
+    X = mot.displacement(sim.time)[0]
+    assert X > 0
+    assert np.allclose(st.x[paddle], st.extra["x0"][paddle] + X, rtol=0, atol=1e-12)
+    assert np.array_equal(st.y[paddle], st.extra["y0"][paddle])
+    assert np.array_equal(st.z[paddle], st.extra["z0"][paddle])
+    assert np.allclose(st.u[paddle], mot.velocity(sim.time)[0], rtol=0, atol=1e-12)
+    assert np.array_equal(st.x[tank], st.extra["x0"][tank])
+    assert not sim.pipeline.selection.still_walls

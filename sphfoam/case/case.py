@@ -213,6 +213,10 @@ class Case:
             mot = build_model("motion", wall.motion, pd_file, f"walls.{name}.motion", problems)
             if mot is None:
                 continue
+            if self.dimension not in getattr(mot, "dims", (2,)):
+                problems.append(Problem(pd_file, f"walls.{name}.motion.type",
+                                        f"motion {mot.name!r} has no {self.dimension}-D form"))
+                continue
             try:
                 mot.resolve(self.path)
             except (OSError, ValueError) as e:

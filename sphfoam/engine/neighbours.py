@@ -229,7 +229,9 @@ def deal_bands(half, n, threads):
 @njit(cache=True)
 def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start):
     """Split the neighbour list for the half-list loops: ``nb_mid[a]`` is where the
-    neighbours b > a of particle a start in its list; the cell rows are grouped into about
+    neighbours b > a of particle a start in its list; the cell rows (``ncy`` rows of ``ncx``
+    cells; in 3-D, ``ncz`` layers of ``ncx ncy`` cells, the caller passes those) are grouped
+    into about
     ``bands`` bands of consecutive rows holding about as many particles each, and
     ``band_start[i]`` is the first particle of band i (``band_start[nb]`` = n). Returns the
     number of bands nb; 0 unless, as the cell walk of particles sorted by cell makes them,

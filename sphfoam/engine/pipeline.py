@@ -117,15 +117,18 @@ class Pipeline:
         if self.rates_half is None and self.density_half is None:
             return None
         n = nb_start.shape[0] - 1
-        size = n + 2 * cells.ncy + 2
+        # the rows of the bands: cell rows along x in 2-D, layers of cells (one z) in 3-D
+        row, rows = (cells.ncx, cells.ncy) if cells.dim == 2 else \
+            (cells.ncx * cells.ncy, cells.ncz)
+        size = n + 2 * rows + 2
         if nb_start[-1] >= 2 ** 32:
             return None
         if half is None or half.base is None or half.base.shape[0] != size:
             buf = np.empty(size, dtype=np.uint32)
         else:
             buf = half.base
-        nb = half_lists(nb_start, nb_idx, cells.cell_start, cells.ncx, cells.ncy,
-                        HALF_BANDS, buf[:n], buf[n:n + cells.ncy + 1])
+        nb = half_lists(nb_start, nb_idx, cells.cell_start, row, rows,
+                        HALF_BANDS, buf[:n], buf[n:n + rows + 1])
         if not nb:
             return None
         half = buf[:n + 2 * nb + 2]

@@ -31,16 +31,30 @@ def prescribe_patch(x, y, u, v, patch, x0, y0, which, ox, oy, uu, vv):
             v[a] = vv
 
 
+@njit(parallel=True, cache=True)
+def prescribe_patch_3d(x, y, z, u, v, w, patch, x0, y0, z0, which, ox, oy, oz, uu, vv, ww):
+    """Particles of wall entry ``which`` in 3-D: r = r0 + d(t), v = d'(t)."""
+    for a in prange(x.shape[0]):
+        if patch[a] == which:
+            x[a] = x0[a] + ox
+            y[a] = y0[a] + oy
+            z[a] = z0[a] + oz
+            u[a] = uu
+            v[a] = vv
+            w[a] = ww
+
+
 def _refuse_two_dimensional_hooks(sel, motions) -> None:
     """In three dimensions: refuse, by name, a selected model whose run-time hooks are
     written for two (mirror ghosts, Adami's wall velocity, the wall law, XSPH's and the
-    shiftings' advection), and prescribed wall motion (not yet in three dimensions)."""
+    shiftings' advection) and a motion with no 3-D form."""
     for m in sel.models():
         why = missing_dimension(m, 3)
         if why is not None:
             raise ValueError(why)
-    if motions:
-        raise ValueError("prescribed wall motion has no 3-D form yet")
+    for m in (motions or {}).values():
+        if 3 not in getattr(m, "dims", (2,)):
+            raise ValueError(f"motion {m.name!r} has no 3-D form")
 
 
 @dataclass
@@ -190,11 +204,17 @@ class Simulation:
         st = self.state
         offs, vels = {}, {}
         for which, mot in self.motions.items():
-            (ox, oy), (uu, vv) = mot.displacement(t), mot.velocity(t)
-            offs[which], vels[which] = (ox, oy), (uu, vv)
-            if "patch" in st.extra:
+            off, vel = mot.displacement(t), mot.velocity(t)
+            if self.dim == 3:
+                off, vel = (tuple(off) + (0.0,))[:3], (tuple(vel) + (0.0,))[:3]
+                if "patch" in st.extra:
+                    ex = st.extra
+                    prescribe_patch_3d(st.x, st.y, st.z, st.u, st.v, st.w, ex["patch"],
+                                       ex["x0"], ex["y0"], ex["z0"], float(which), *off, *vel)
+            elif "patch" in st.extra:
                 prescribe_patch(st.x, st.y, st.u, st.v, st.extra["patch"], st.extra["x0"],
-                                st.extra["y0"], float(which), ox, oy, uu, vv)
+                                st.extra["y0"], float(which), *off[:2], *vel[:2])
+            offs[which], vels[which] = off, vel
         self._run_hooks("walls_moved", offs, vels)
         self._run_hooks("before_evaluation")
 
@@ -369,7 +389,8 @@ class Simulation:
             self._evaluations += 1
         out_sigma = st.sigma if sigma else st.sigma[:0]
         if self.half_lists and self._half is not None and self.pipeline.rates_half is not None:
-            self.pipeline.rates_half(*args, self._dealt_half(), st.ax, st.ay, st.drho, out_sigma)
+            self.pipeline.rates_half(*args, self._dealt_half(), *st.accelerations, st.drho,
+                                     out_sigma)
         else:
             self.pipeline.rates(*args, *st.accelerations, st.drho, out_sigma)
         self._run_hooks("after_rates")

@@ -144,6 +144,11 @@ class Term:
     #: of two non-fluid particles then adds nothing this term keeps, and the neighbour list
     #: may leave such pairs out (``Plan.fluid_pairs_only``)
     nonfluid_discarded: bool = False
+    #: True when the pair code is a multiple of the pair's relative velocity (``U@c_ab``, e.g.
+    #: the continuity equation's v_ab . grad W): it adds exactly 0 for two particles of one
+    #: velocity, so with every wall still (``Selection.still_walls``) a pair of two wall
+    #: particles adds nothing and the neighbour list may leave it out
+    relative: bool = False
     #: a pair force coefficient F_ab equal to F_ba (an expression of the pair and of
     #: a's ``init`` names): the term adds -m_b F_ab grad_a W_ab to dv_a/dt and, over half
     #: lists, +m_a F_ab grad_a W_ab to dv_b/dt. Its ``pair`` and ``reaction`` code are

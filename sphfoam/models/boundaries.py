@@ -51,6 +51,10 @@ class Boundary(PipelineModel):
     #: whether the boundary keeps particles of mass 0 in the neighbour list (dormant mirror
     #: ghosts); the generated maximum of T(3.89) then skips them (sphfoam.engine.bodies)
     massless_ghosts: bool = False
+    #: True when the boundary leaves the wall particles' velocities as set up (they change
+    #: only with prescribed motions); False when it computes them (mirrored ghosts, a
+    #: generalised wall's extrapolated velocity)
+    keeps_wall_velocity: bool = False
 
     @property
     def particle_fields(self) -> tuple[str, ...]:
@@ -69,6 +73,7 @@ class StationaryGhosts(Boundary):
 
     name = "stationaryGhosts"
     doc = "fixed wall-particle rows whose density evolves by pairing with fluid, T §3.8"
+    keeps_wall_velocity = True
 
     def neighbour_kinds(self):
         """Every wall particle is wet: it enters every term as a fluid particle would, and

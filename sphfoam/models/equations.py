@@ -23,7 +23,8 @@ class Continuity(PipelineModel):
         return [Term("continuityVelocity", pair="U@c_ab = U@_ab", writes=("uc",),
                      parity="odd", **_CONTINUITY),
                 Term("continuity", pair=self.drho_code, reads=("gradW", "uc"),
-                     writes=("drho",), reaction=self.reaction_code, **_CONTINUITY)]
+                     writes=("drho",), reaction=self.reaction_code, relative=True,
+                     **_CONTINUITY)]
 
 
 @register

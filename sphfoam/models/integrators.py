@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from sphfoam.engine.stepping import ParticleUpdate
+from sphfoam.engine.stepping import ParticleUpdate, field_components
 from sphfoam.registry import Coeffs, Model, register
 
 #: r += dt U (every particle: walls move with their prescribed velocity)
@@ -187,16 +187,15 @@ t_hist[a] = t_new"""),)
     #: the history, persistent particle fields (written to and read from time directories)
     history = {"U@_old": "U{axis}_0", "rho_old": "rho_0", "dt_old": "deltaT_0",
                "t_hist": "historyTime"}
-    HISTORY = ("Ux_0", "Uy_0", "rho_0", "deltaT_0", "historyTime")
-
 
     def _history_valid(self, run) -> bool:
         """Whether ``state.extra`` holds history for the current state (else: Euler step);
         (re)creates the arrays when they are missing."""
         st = run.state
         ex = st.extra
-        if st.n == 0 or not all(k in ex and ex[k].shape == (st.n,) for k in self.HISTORY):
-            for k in self.HISTORY:
+        names = [c for f in self.history.values() for c in field_components(f, st.dim)]
+        if st.n == 0 or not all(k in ex and ex[k].shape == (st.n,) for k in names):
+            for k in names:
                 ex[k] = np.zeros(st.n)
             return False
         dt_old = float(ex["deltaT_0"][0])

@@ -24,6 +24,8 @@ from sphfoam.registry import Coeffs, Model, register
 
 class Motion(Model, abc.ABC):
     family = "motion"
+    #: the case dimensions it moves walls in (a 3-D case refuses one without 3 by name)
+    dims: tuple[int, ...] = (2,)
 
     def resolve(self, case_path: Path) -> None:
         """Load whatever the motion reads from the case (e.g. a table file)."""
@@ -44,18 +46,22 @@ class PistonPaddle(Motion):
 
     name = "pistonPaddle"
     doc = "piston wave paddle moving along a direction by a wave maker's X(t)"
+    dims = (2, 3)
 
     class Coeffs(Coeffs):
-        direction: Vector2 = Field((1.0, 0.0), description="direction of the stroke")
+        direction: tuple[float, ...] = Field((1.0, 0.0), description=(
+            "direction of the stroke: (x y) in 2-D, (x y z) in 3-D"))
         waveMaker: dict[str, Any] = Field(description="{ type <waveMaker>; coeffs }")
 
         @field_validator("direction")
         @classmethod
         def _unit(cls, v):
-            n = float(np.hypot(*v))
+            if len(v) not in (2, 3):
+                raise ValueError(f"expected (x y) or (x y z), got {v!r}")
+            n = float(np.linalg.norm(v))
             if n == 0:
                 raise ValueError("direction must not be zero")
-            return (v[0] / n, v[1] / n)
+            return tuple(c / n for c in v)
 
         @field_validator("waveMaker")
         @classmethod
@@ -75,13 +81,11 @@ class PistonPaddle(Motion):
 
     def displacement(self, t):
         X = self.maker.position(t)
-        d = self.coeffs.direction
-        return (X * d[0], X * d[1])
+        return tuple(X * c for c in self.coeffs.direction)
 
     def velocity(self, t):
         U = self.maker.velocity(t)
-        d = self.coeffs.direction
-        return (U * d[0], U * d[1])
+        return tuple(U * c for c in self.coeffs.direction)
 
 
 @register

@@ -118,7 +118,7 @@ def local_surface(p: np.ndarray, dx: float) -> np.ndarray:
     return top[col] + 0.5 * dx
 
 
-def _refuse(boundary, moving: bool, fields) -> None:
+def _refuse(boundary, fields) -> None:
     """What the 3-D set-up cannot make, refused by name."""
     if getattr(boundary, "wall_placement", "rows") == "none":
         raise CaseError.single("constant/sphProperties", "boundary.type", (
@@ -130,14 +130,12 @@ def _refuse(boundary, moving: bool, fields) -> None:
         raise CaseError.single("constant/sphProperties", "boundary.type", (
             f"the selected models read the wall field(s) {', '.join(sorted(set(lacking)))}, "
             "which have no 3-D form: use stationaryGhosts"))
-    if moving:
-        raise CaseError.single(PD, "walls", "prescribed wall motion has no 3-D form yet")
 
 
 def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, waves=(),
                fields=()) -> ParticleState:
     """Particles of a 3-D case at rest in hydrostatic equilibrium (see the module)."""
-    _refuse(boundary, moving, fields)
+    _refuse(boundary, fields)
     dx = pd.dx
     tol = 1 - LATTICE_TOLERANCE
     anchor = case_anchor(pd)
@@ -182,6 +180,7 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
         vel = vel[patch]
     else:
         pw, dw, vel = np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3))
+        patch = np.zeros(0, dtype=np.int64)
     if len(pw) and len(pf):      # fluid never overlaps walls: dx/2 from every wall particle
         d, _ = cKDTree(pw).query(pf)
         ok = d >= 0.5 * dx * tol
@@ -217,5 +216,10 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
     kind = np.concatenate([np.full(len(pf), FLUID), np.full(len(pw), WALL)])
     dz = np.concatenate([dzf, np.full(len(pw), dx)])
     extra = {"wallDist": np.concatenate([np.zeros(len(pf)), dw])} if len(pw) else {}
+    if moving:          # the wall entry of each wall particle and where prescribed motion
+        extra["patch"] = np.concatenate([np.full(len(pf), -1.0),  # displaces it from
+                                         patch.astype(float) if len(pw) else np.zeros(0)])
+        for k, c in zip(("x0", "y0", "z0"), pos.T):
+            extra[k] = c.copy()
     return ParticleState(pos[:, 0], pos[:, 1], vel_all[:, 0], vel_all[:, 1], rho,
                          rho * dx * dx * dz, kind, extra=extra, z=pos[:, 2], w=vel_all[:, 2])
