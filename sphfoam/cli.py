@@ -356,7 +356,8 @@ def plot(case: Path = typer.Argument(Path("."), help="case directory"),
 @_guarded
 def render(case: Path = typer.Argument(Path("."), help="case directory"),
            field: str = typer.Option("U", "--field", "-f", help="colour by this field: U "
-                                     "(|U|), Ux, Uy, p, rho or any scalar field written"),
+                                     "(|U|), Ux, Uy (Uz in 3-D), p, rho or any scalar "
+                                     "field written"),
            time: Optional[list[float]] = typer.Option(None, "--time", "-t",
                                                       help="only these times"),
            movie: Literal["auto", "gif", "mp4", "none"] = typer.Option(
@@ -366,13 +367,20 @@ def render(case: Path = typer.Argument(Path("."), help="case directory"),
            value_range: Optional[tuple[float, float]] = typer.Option(
                None, "--range", help="colour range LO HI (default: min..max over all frames)"),
            box: Optional[tuple[float, float, float, float]] = typer.Option(
-               None, "--box", help="show only X0 Y0 X1 Y1 (m)")):
-    """PNG frames of the particles coloured by a field, and a GIF or MP4 of the run."""
+               None, "--box", help="show only X0 Y0 X1 Y1 (m); 3-D: of the slice, in its "
+               "plane's two axes"),
+           slice_at: Optional[str] = typer.Option(
+               None, "--slice", help="3-D: the slice's plane AXIS=VALUE, e.g. y=0.2 "
+               "(default: y through the middle)"),
+           slab: Optional[float] = typer.Option(
+               None, "--slab", help="3-D: the slice's thickness (m; default dx)")):
+    """PNG frames of the particles coloured by a field, and a GIF or MP4 of the run (3-D: a
+    3-D view and a slice)."""
     from sphfoam.render import render_case
 
     c = _case(case)
     _guard(render_case, c.path, field, time, movie=movie, fps=fps, width=width,
-           value_range=value_range, box=box, log=_say)
+           value_range=value_range, box=box, slice_at=slice_at, slab=slab, log=_say)
 
 
 @app.command()

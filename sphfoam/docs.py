@@ -105,7 +105,11 @@ FALLBACK_DESCRIPTIONS: dict[str, dict[str, str]] = {
         "side": "side of the line, looking along it, on which the wall rows lie",
     },
     "MeshWalls": {
-        "type": "wall rows along the lines of a mesh file (STL, OBJ, VTK, Gmsh, ...)",
+        "type": "walls from a mesh file (STL, OBJ, VTK, Gmsh, ...): wall rows along its "
+                "section in 2-D, layers behind its surface in 3-D",
+    },
+    "MeshRegion": {
+        "type": "the inside of a closed surface mesh (STL, OBJ, VTK, Gmsh, ...), 3-D",
     },
     "Domain": {
         "min": "lower-left corner",
@@ -174,6 +178,11 @@ def _is_vector2(meta) -> bool:
     return any(isinstance(m, BeforeValidator) and m.func is schemas._vector2 for m in meta)
 
 
+def _is_vector(meta) -> bool:
+    """A point or vector of the case's dimension (:data:`sphfoam.case.schemas.Vector`)."""
+    return any(isinstance(m, BeforeValidator) and m.func is schemas._vector for m in meta)
+
+
 def _dimensions(meta) -> tuple[int, ...] | None:
     """The dimensions checked by :func:`sphfoam.case.schemas.dimensioned`, if any."""
     for m in meta:
@@ -226,6 +235,8 @@ def _type_name(tp, meta=()) -> str:
     meta = list(meta) + inner
     if _is_vector2(meta):
         return "vector (x y)"
+    if _is_vector(meta):
+        return "vector (x y), 3-D (x y z)"
     dims = _dimensions(meta)
     if dims is not None:
         return f"{_type_name(tp)} [{' '.join(map(str, dims))}]"

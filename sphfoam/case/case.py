@@ -26,8 +26,9 @@ from pydantic import ValidationError
 import sphfoam.registry as registry
 from sphfoam.case import foamdict
 from sphfoam.case.errors import CaseError, Problem, did_you_mean, from_validation
-from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, MeshWalls, ParticleDict,
-                                  SphSchemes, TransportProperties, WaveProperties)
+from sphfoam.case.schemas import (SPH_FAMILIES, ControlDict, Gravity, MeshRegion, MeshWalls,
+                                  ParticleDict, SphSchemes, TransportProperties,
+                                  WaveProperties)
 from sphfoam.context import CaseContext
 
 FILES = {
@@ -113,14 +114,16 @@ class Case:
     def particles(self) -> ParticleDict:
         pd = self._validated("particleDict")
         problems = []
-        for name, wall in pd.walls.items():
-            if isinstance(wall, MeshWalls):          # read the mesh file of a `type mesh` wall
+        entries = [("fluid", n, r) for n, r in pd.fluid.items()] + \
+            [("walls", n, w) for n, w in pd.walls.items()]
+        for group, name, entry in entries:       # read the file of a `type mesh` entry
+            if isinstance(entry, (MeshWalls, MeshRegion)):
                 from sphfoam.case.meshwalls import MeshWallError
 
                 try:
-                    wall.load(self.path)
+                    entry.load(self.path)
                 except MeshWallError as e:
-                    problems.append(Problem(FILES["particleDict"][0], f"walls.{name}.file",
+                    problems.append(Problem(FILES["particleDict"][0], f"{group}.{name}.file",
                                             str(e)))
         if problems:
             raise CaseError(problems)

@@ -41,6 +41,42 @@ def read_mesh_walls(path, z: float = 0.0, scale: float = 1.0,
     """Polylines (vertex lists, solid on the right) of the mesh file ``path``: its line
     cells, the section of its surface by the plane z = ``z`` (in file units), or the boundary
     of a flat surface; then scaled by ``scale`` and shifted by ``translate``."""
+    mesh, pts, lines, faces = read_cells(path)
+    extent = float(np.ptp(pts, axis=0).max()) or 1.0
+    tol = 1e-9 * extent
+    tris = _triangles(faces)
+    if tris.size:
+        zs = pts[np.unique(tris), 2]
+        if np.ptp(zs) <= tol:
+            segs = _boundary_edges(pts, tris)
+        else:
+            segs = _section(pts, tris, z)
+            if not segs.size:
+                raise MeshWallError(f"{path}: the surface does not cross the plane z = {z:g} "
+                                    f"(its z range is {zs.min():g} .. {zs.max():g})")
+        chains = _chain_directed(segs, tol)
+    elif lines:
+        e = np.concatenate(lines)
+        segs = np.stack([pts[e[:, 0], :2], pts[e[:, 1], :2]], axis=1)
+        chains = _chain_undirected(segs, tol)
+    else:
+        kinds = ", ".join(sorted({b.type for b in mesh.cells})) or "none"
+        raise MeshWallError(f"{path}: no line cells and no triangles or quads (cells: {kinds})")
+    out = []
+    tx, ty = float(translate[0]), float(translate[1])
+    for c in chains:
+        c = _merge_collinear(c, tol)
+        if len(c) >= 2:
+            out.append([(float(scale * x + tx), float(scale * y + ty)) for x, y in c])
+    if not out:
+        raise MeshWallError(f"{path}: every wall segment has zero length")
+    return out
+
+
+def read_cells(path):
+    """Read the mesh file ``path`` with meshio: (the meshio mesh, its points (n, 3), its line
+    cells' end nodes [(m, 2)], its surface cells' corner nodes [(m, 3 or 4)], convex
+    ``polygon`` cells split into fans of triangles). Raises MeshWallError with the reason."""
     import meshio
 
     path = Path(path)
@@ -71,35 +107,7 @@ def read_mesh_walls(path, z: float = 0.0, scale: float = 1.0,
             lines.append(data[:, :_LINE_CELLS[block.type]])
         elif block.type in _SURFACE_CELLS and data.size:
             faces.append(data[:, :_SURFACE_CELLS[block.type]])
-    extent = float(np.ptp(pts, axis=0).max()) or 1.0
-    tol = 1e-9 * extent
-    tris = _triangles(faces)
-    if tris.size:
-        zs = pts[np.unique(tris), 2]
-        if np.ptp(zs) <= tol:
-            segs = _boundary_edges(pts, tris)
-        else:
-            segs = _section(pts, tris, z)
-            if not segs.size:
-                raise MeshWallError(f"{path}: the surface does not cross the plane z = {z:g} "
-                                    f"(its z range is {zs.min():g} .. {zs.max():g})")
-        chains = _chain_directed(segs, tol)
-    elif lines:
-        e = np.concatenate(lines)
-        segs = np.stack([pts[e[:, 0], :2], pts[e[:, 1], :2]], axis=1)
-        chains = _chain_undirected(segs, tol)
-    else:
-        kinds = ", ".join(sorted({b.type for b in mesh.cells})) or "none"
-        raise MeshWallError(f"{path}: no line cells and no triangles or quads (cells: {kinds})")
-    out = []
-    tx, ty = float(translate[0]), float(translate[1])
-    for c in chains:
-        c = _merge_collinear(c, tol)
-        if len(c) >= 2:
-            out.append([(float(scale * x + tx), float(scale * y + ty)) for x, y in c])
-    if not out:
-        raise MeshWallError(f"{path}: every wall segment has zero length")
-    return out
+    return mesh, pts, lines, faces
 
 
 def _triangles(faces: list[np.ndarray]) -> np.ndarray:

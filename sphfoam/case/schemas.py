@@ -383,8 +383,50 @@ class ExtrudeRegion(Strict):
         return self
 
 
-FluidRegion = Annotated[BoxRegion | PolygonRegion | CylinderRegion | ExtrudeRegion,
-                        Field(discriminator="type")]
+def _resolve(file: str, case_dir):
+    from pathlib import Path
+
+    f = Path(file)
+    return f if f.is_absolute() else Path(case_dir) / f
+
+
+class MeshRegion(Strict):
+    """3-D: the inside of a closed surface mesh read with meshio (STL, OBJ, VTK, Gmsh, ...;
+    sphfoam.case.meshsolids, VTK's point-in-surface test), filled on the lattice anchored at
+    the case's origin. The faces' orientation does not matter."""
+
+    type: Literal["mesh"]
+    file: str = Field(description="closed surface mesh, relative to the case directory "
+                      "(e.g. `\"constant/geometry/water.stl\"`): any format meshio reads")
+    scale: float = Field(1.0, gt=0, description="factor on the file's coordinates, e.g. 0.001 "
+                         "for a CAD file in mm")
+    translate: Vector = Field((0.0, 0.0, 0.0), description="shift (x y z) (m) added after "
+                              "scaling")
+    _surface: Any = PrivateAttr(None)
+
+    @model_validator(mode="after")
+    def _shape(self, info: ValidationInfo):
+        _three_dimensional("a mesh fluid region", info)
+        return self
+
+    def load(self, case_dir) -> None:
+        """Read the surface (relative to ``case_dir``); raises MeshWallError with the
+        reason (not closed, no triangles, ...)."""
+        from sphfoam.case.meshsolids import read_surface
+
+        self._surface = read_surface(_resolve(self.file, case_dir), self.scale,
+                                     self.translate, closed=True)
+
+    @property
+    def surface(self):
+        """The closed surface (sphfoam.case.meshsolids.Surface), once :meth:`load` ran."""
+        if self._surface is None:
+            raise RuntimeError(f"mesh region {self.file}: load(case_dir) has not been called")
+        return self._surface
+
+
+FluidRegion = Annotated[BoxRegion | PolygonRegion | CylinderRegion | ExtrudeRegion
+                        | MeshRegion, Field(discriminator="type")]
 
 
 _MOTION_DOC = ("prescribed motion of this wall, { type <motion>; ... } (sphfoam models "
@@ -497,7 +539,7 @@ class PolylineWalls(_Wall):
 
     @model_validator(mode="after")
     def _plane(self, info: ValidationInfo):
-        _two_dimensional("a polyline", info, "box, block, cylinder or extrude walls")
+        _two_dimensional("a polyline", info, "box, block, cylinder, extrude or mesh walls")
         return self
 
 
@@ -519,10 +561,15 @@ class SlopeWalls(_Wall):
 
 
 class MeshWalls(_Wall):
-    """Wall rows along the lines of a mesh file read with meshio (sphfoam.case.meshwalls):
+    """Walls from a mesh file read with meshio. 2-D (sphfoam.case.meshwalls): wall rows along
     its line cells, the section of its surface (STL, OBJ, VTK, Gmsh triangles or quads) by the
     plane z = ``z``, or the boundary of a flat surface mesh; the solid lies behind the faces
-    (their normals point into the fluid) or on ``side`` of the line cells."""
+    (their normals point into the fluid) or on ``side`` of the line cells. 3-D
+    (sphfoam.case.meshsolids, VTK's distance and point-in-surface filters): a closed surface
+    is a solid with ``layers`` of wall particles inside it and the fluid outside (``side
+    left``: a container, the layers outside it and the fluid inside); an open surface (a
+    terrain, a sheet of sea wall) has its layers behind its faces, opposite their normals
+    (``side left``: in front)."""
 
     type: Literal["mesh"]
     file: str = Field(description="mesh file, relative to the case directory (e.g. "
@@ -530,37 +577,63 @@ class MeshWalls(_Wall):
     layers: int = Field(3, ge=1, le=10, description="rows of wall particles")
     side: Literal["left", "right"] = Field("right", description=(
         "where the solid lies: line cells, on this side of their direction; surfaces, "
-        "`right` behind the faces (their normals point into the fluid), `left` in front"))
+        "`right` behind the faces (their normals point into the fluid), `left` in front; "
+        "3-D closed surfaces, `right` inside, `left` outside (a container)"))
     z: float = Field(0.0, description="height of the cutting plane through a surface, in the "
-                     "file's units")
+                     "file's units (2-D only)")
     scale: float = Field(1.0, gt=0, description="factor on the file's coordinates, e.g. 0.001 "
                          "for a CAD file in mm")
-    translate: Vector2 = Field((0.0, 0.0), description="shift (m) added after scaling")
-    velocity: Vector2 = Field((0.0, 0.0), description="constant wall velocity (m/s)")
+    translate: Vector = Field((0.0, 0.0), description="shift (m) added after scaling: (x y) "
+                              "in 2-D, (x y z) in 3-D")
+    velocity: Vector = Field((0.0, 0.0), description="constant wall velocity (m/s)")
     _polylines: list | None = PrivateAttr(None)
+    _surface: Any = PrivateAttr(None)
+    _dim: int = PrivateAttr(2)
 
     @model_validator(mode="after")
-    def _plane(self, info: ValidationInfo):
-        _two_dimensional("a mesh wall (its section by a plane)", info,
-                         "box, block, cylinder or extrude walls")
+    def _dimension(self, info: ValidationInfo):
+        self._dim = case_dimension(info)
+        if self._dim == 3:
+            if "z" in self.model_fields_set:
+                raise ValueError("z (the cutting plane of a 2-D case's mesh wall) has no "
+                                 "meaning in 3-D, where the whole surface is the wall: "
+                                 "remove it")
+            if "translate" not in self.model_fields_set:
+                self.translate = (0.0, 0.0, 0.0)
         return self
 
     def load(self, case_dir) -> None:
         """Read the mesh (relative to ``case_dir``); raises MeshWallError with the reason."""
-        from pathlib import Path
+        path = _resolve(self.file, case_dir)
+        if self._dim == 3:
+            from sphfoam.case.meshsolids import read_surface
 
+            self._surface = read_surface(path, self.scale, self.translate)
+            return
         from sphfoam.case.meshwalls import read_mesh_walls
 
-        f = Path(self.file)
-        self._polylines = read_mesh_walls(f if f.is_absolute() else Path(case_dir) / f,
-                                          z=self.z, scale=self.scale, translate=self.translate)
+        self._polylines = read_mesh_walls(path, z=self.z, scale=self.scale,
+                                          translate=self.translate)
 
     @property
     def polylines(self) -> list[list[tuple[float, float]]]:
-        """The wall lines (solid on their right before ``side``), once :meth:`load` ran."""
+        """The wall lines of a 2-D case (solid on their right before ``side``), once
+        :meth:`load` ran."""
         if self._polylines is None:
-            raise RuntimeError(f"mesh wall {self.file}: load(case_dir) has not been called")
+            raise RuntimeError(f"mesh wall {self.file}: load(case_dir) has not been called"
+                               + (" (or the case is 3-D: see surface)" if self._dim == 3
+                                  else ""))
         return self._polylines
+
+    @property
+    def surface(self):
+        """The surface of a 3-D case (sphfoam.case.meshsolids.Surface), once :meth:`load`
+        ran."""
+        if self._surface is None:
+            raise RuntimeError(f"mesh wall {self.file}: load(case_dir) has not been called"
+                               + (" (or the case is 2-D: see polylines)" if self._dim == 2
+                                  else ""))
+        return self._surface
 
 
 WallRegion = Annotated[BoxWalls | BlockWalls | CylinderWalls | ExtrudeWalls | PolylineWalls

@@ -3,7 +3,9 @@ entry as a signed distance (negative inside the shape) and a bounding box.
 
 Boxes and cylinders have closed forms; an extruded section is the intersection of its
 x-z polygon (distance to its edges, inside by the even-odd rule of matplotlib's Path) with
-the slab of its span. The set-up (sphfoam.setup.particles3d) fills a fluid region with the
+the slab of its span. A surface mesh (``type mesh``) is measured by VTK
+(sphfoam.case.meshsolids): negative inside a closed surface, behind an open one's faces;
+``side left`` turns a mesh wall inside out (a container; in front of an open sheet). The set-up (sphfoam.setup.particles3d) fills a fluid region with the
 lattice sites inside it and puts a solid wall's layers at the sites within ``layers`` dx
 inside its surface; a tank (``box`` walls) is the one shape whose solid lies outside.
 """
@@ -14,7 +16,8 @@ import numpy as np
 from matplotlib.path import Path as MplPath
 
 from sphfoam.case.schemas import (BlockWalls, BoxRegion, BoxWalls, CylinderRegion,
-                                  CylinderWalls, ExtrudeRegion, ExtrudeWalls)
+                                  CylinderWalls, ExtrudeRegion, ExtrudeWalls, MeshRegion,
+                                  MeshWalls)
 
 #: a tank's sides in 3-D (z up): (axis, 0 for the min side, 1 for the max side)
 FACE_AXES = {"left": (0, 0), "right": (0, 1), "front": (1, 0), "back": (1, 1),
@@ -77,6 +80,11 @@ def signed_distance(shape, p: np.ndarray) -> np.ndarray:
         return cylinder_distance(shape.point1, shape.point2, shape.radius, p)
     if isinstance(shape, (ExtrudeRegion, ExtrudeWalls)):
         return extrude_distance(shape.points, shape.span, p)
+    if isinstance(shape, MeshRegion):
+        return shape.surface.signed_distance(p)
+    if isinstance(shape, MeshWalls):
+        d = shape.surface.signed_distance(p)
+        return -d if shape.side == "left" else d
     raise TypeError(f"{type(shape).__name__} is not a 3-D shape")
 
 
@@ -94,6 +102,8 @@ def bounds(shape) -> tuple[np.ndarray, np.ndarray]:
         lo = np.array([pts[:, 0].min(), shape.span[0], pts[:, 1].min()])
         hi = np.array([pts[:, 0].max(), shape.span[1], pts[:, 1].max()])
         return lo, hi
+    if isinstance(shape, (MeshRegion, MeshWalls)):
+        return shape.surface.lo.copy(), shape.surface.hi.copy()
     raise TypeError(f"{type(shape).__name__} is not a 3-D shape")
 
 

@@ -12,8 +12,9 @@
 
 Each ``.vtp`` is a vtkPolyData with one vertex cell per particle (so the Surface
 representation shows the points) and stores its time as ``TimeValue`` field data.
-Vectors are 3-component point data with z = 0: ``U``, and the pairs of scalar fields
-listed in :data:`VECTOR_PAIRS` (``x0, y0`` -> ``X0``, ...). An export replaces the
+Vectors are 3-component point data: ``U``, and the component fields listed in
+:data:`VECTOR_PAIRS` (``x0, y0`` -> ``X0``, ...); a 2-D case's with z = 0, a 3-D case's
+(``dimension 3;`` in system/particleDict) points and vectors with their z components. An export replaces the
 previous one: files of times not exported this time are removed, so ``-t`` never leaves
 stale files behind.
 """
@@ -39,11 +40,12 @@ from .fields import has_particles, read_state
 
 __all__ = ["write_vtp", "export_case", "VECTOR_PAIRS", "BLOCKS"]
 
-#: scalar fields exported as one 3-vector (z = 0): vector name -> (x component, y component)
+#: scalar fields exported as one 3-vector: vector name -> (x, y, z component); a 2-D case
+#: has no z component (0 in the file)
 VECTOR_PAIRS = {
-    "X0": ("x0", "y0"),        # a moving wall particle's rest position
-    "n": ("nx", "ny"),         # wall normal (boundary models with wall_fields)
-    "U_0": ("Ux_0", "Uy_0"),   # an integrator's previous-step velocity
+    "X0": ("x0", "y0", "z0"),           # a moving wall particle's rest position
+    "n": ("nx", "ny", "nz"),            # wall normal (boundary models with wall_fields)
+    "U_0": ("Ux_0", "Uy_0", "Uz_0"),    # an integrator's previous-step velocity
 }
 
 #: the blocks of each time: name -> which particles (from the ``type`` field)
@@ -58,18 +60,21 @@ def _pad3(a: np.ndarray) -> np.ndarray:
 
 
 def _vectorise(fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """Replace the scalar pairs of :data:`VECTOR_PAIRS` by (N, 2) vectors."""
+    """Replace the component fields of :data:`VECTOR_PAIRS` by (N, 2) vectors, or (N, 3)
+    where the z component is there too (a 3-D case)."""
     out = dict(fields)
-    for vec, (cx, cy) in VECTOR_PAIRS.items():
+    for vec, (cx, cy, cz) in VECTOR_PAIRS.items():
         if cx in out and cy in out and vec not in out:
-            out[vec] = np.column_stack([out.pop(cx), out.pop(cy)])
+            comps = [out.pop(cx), out.pop(cy)] + ([out.pop(cz)] if cz in out else [])
+            out[vec] = np.column_stack(comps)
     return out
 
 
 def write_vtp(path: str | Path, fields: dict[str, np.ndarray], time: float | None = None) -> None:
     """Write particles to a binary (appended, zlib-compressed) ``.vtp`` file.
 
-    ``fields["positions"]`` (N, 2) gives the points (z = 0). Every other field
+    ``fields["positions"]`` (N, 2) gives the points (z = 0), (N, 3) the 3-D points. Every
+    other field
     becomes point data: (N,) arrays as scalars (integers as int64), (N, 2)
     arrays as 3-component vectors with z = 0, (N, 3) arrays as they are.
     ``time`` is stored as the ``TimeValue`` field data ParaView reads.
@@ -78,7 +83,7 @@ def write_vtp(path: str | Path, fields: dict[str, np.ndarray], time: float | Non
         raise KeyError("write_vtp needs a 'positions' field")
     pos = np.asarray(fields["positions"], dtype=np.float64)
     if pos.ndim != 2 or pos.shape[1] not in (2, 3):
-        raise ValueError(f"positions must have shape (N, 2), got {pos.shape}")
+        raise ValueError(f"positions must have shape (N, 2) or (N, 3), got {pos.shape}")
     n = len(pos)
 
     points = vtkPoints()
@@ -125,6 +130,16 @@ def write_vtp(path: str | Path, fields: dict[str, np.ndarray], time: float | Non
         raise OSError(f"failed to write {path}")
 
 
+def _dimension(case_dir: Path) -> int | None:
+    """The case's ``dimension`` (system/particleDict), None where there is no particleDict
+    (then each time directory's positions decide, sphfoam.io.fields.read_state)."""
+    from ..case.case import Case
+
+    if not (case_dir / "system" / "particleDict").is_file():
+        return None
+    return Case(case_dir).dimension
+
+
 def _time_value(folder: Path) -> float:
     """The exact time of a time directory (``uniform/time``), else its name."""
     from ..case import foamdict
@@ -162,15 +177,16 @@ def _write_xml(root: ET.Element, path: Path) -> None:
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
 
 
-def _write_vtm(out_dir: Path, stem: str, folder: Path, t: float) -> list[tuple[str, str]]:
-    """``<stem>.vtm`` and its blocks ``<stem>/<block>.vtp`` from a time directory; returns
-    (block, relative path) of each."""
+def _write_vtm(out_dir: Path, stem: str, folder: Path, t: float,
+               dim: int | None = None) -> list[tuple[str, str]]:
+    """``<stem>.vtm`` and its blocks ``<stem>/<block>.vtp`` from a time directory of a case
+    of dimension ``dim``; returns (block, relative path) of each."""
     (out_dir / stem).mkdir()
     vtm = ET.Element("VTKFile", type="vtkMultiBlockDataSet", version="1.0",
                      byte_order="LittleEndian")
     mb = ET.SubElement(vtm, "vtkMultiBlockDataSet")
     out = []
-    for i, (block, f) in enumerate(_split(_vectorise(read_state(folder))).items()):
+    for i, (block, f) in enumerate(_split(_vectorise(read_state(folder, dim=dim))).items()):
         rel = f"{stem}/{block}.vtp"
         write_vtp(out_dir / rel, f, time=t)
         ET.SubElement(mb, "DataSet", index=str(i), name=block, file=rel)
@@ -193,6 +209,7 @@ def export_case(
     case_dir = Path(case_dir).resolve()
     name = case_dir.name
     out_dir = case_dir / out_dir_name
+    dim = _dimension(case_dir)
 
     available = [(t, d) for t, d in list_times(case_dir) if has_particles(d)]
     if not available:
@@ -222,12 +239,12 @@ def export_case(
     for _, d in selected:
         t = _time_value(d)
         stem = f"{name}_{d.name}"
-        for block, rel in _write_vtm(out_dir, stem, d, t):
+        for block, rel in _write_vtm(out_dir, stem, d, t, dim):
             series[block].append({"name": rel, "time": t})
         ET.SubElement(coll, "DataSet", timestep=repr(t), group="", part="0", file=f"{stem}.vtm")
     if times is None and has_particles(case_dir / UNSETTLED):
         # the layout before settling (sphfoam.setup.settling): beside the series, not in it
-        _write_vtm(out_dir, f"{name}_{UNSETTLED}", case_dir / UNSETTLED, 0.0)
+        _write_vtm(out_dir, f"{name}_{UNSETTLED}", case_dir / UNSETTLED, 0.0, dim)
     for block, files in series.items():
         (out_dir / f"{name}_{block}.vtp.series").write_text(
             json.dumps({"file-series-version": "1.0", "files": files}, indent=1))

@@ -4,7 +4,8 @@ As in 2-D (sphfoam.setup.particles): fluid particles sit at the centres of a cub
 of spacing dx, so a block holds its volume / dx^3 particles and its surface lies dx/2 beyond
 the outermost layer; wall particles sit at the lattice centres ``layers`` deep behind a
 wall (outside a tank's closed sides; inside a solid's surface: a block, a cylinder, an
-extruded section, sphfoam.case.solids), DualSPHysics' layout of boundary particles. Fluid
+extruded section, a closed surface mesh, sphfoam.case.solids; behind an open surface mesh's
+faces), DualSPHysics' layout of boundary particles. Fluid
 keeps dx/2 from every wall particle and from every solid's surface. The initial state is
 hydrostatic: p = rho0 g_down (eta - z), eta the top of each (x, y) column plus dx/2 (wall
 particles: their nearest fluid particle's), rho from the inverse of the equation of state;
@@ -19,7 +20,7 @@ from scipy.spatial import cKDTree
 
 from sphfoam.case.errors import CaseError
 from sphfoam.case.geometry import LATTICE_TOLERANCE, lattice_count
-from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
+from sphfoam.case.schemas import BoxRegion, BoxWalls, MeshWalls, ParticleDict
 from sphfoam.case.solids import bounds, signed_distance, tank_wall_depth
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.setup.particles import wall_pressure
@@ -61,7 +62,7 @@ def fluid_points(region, dx, anchor) -> np.ndarray:
     if isinstance(region, BoxRegion):
         return lattice(region.min, region.max, dx)
     lo, hi = bounds(region)
-    p = lattice(lo, hi, dx, anchor)
+    p = lattice(lo - dx, hi + dx, dx, anchor)   # lattice() keeps whole cells: pad by one
     return p[signed_distance(region, p) < 0.0]
 
 
@@ -76,8 +77,10 @@ def wall_points(wall, dx, anchor) -> tuple[np.ndarray, np.ndarray]:
         keep = (d > 0.0) & (d < np.inf)
         return p[keep], d[keep]
     lo, hi = bounds(wall)
+    if isinstance(wall, MeshWalls):      # behind an open sheet, outside a container
+        lo, hi = lo - L, hi + L
     anchor = np.asarray(wall.min, float) if hasattr(wall, "min") else anchor
-    p = lattice(lo, hi, dx, anchor)
+    p = lattice(lo - dx, hi + dx, dx, anchor)   # lattice() keeps whole cells: pad by one
     d = -signed_distance(wall, p)
     keep = (d > 0.0) & (d <= L * (1 + LATTICE_TOLERANCE))
     return p[keep], d[keep]
