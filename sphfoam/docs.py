@@ -487,6 +487,32 @@ def _details(cls) -> str:
     return para
 
 
+def dimensions_of(family: str, cls) -> tuple[int, ...] | None:
+    """The case dimensions a registered model runs in (None: not a question for its family,
+    e.g. a wave theory): a pipeline model's from its terms and hooks
+    (:func:`sphfoam.engine.plan.missing_dimension`), a function object's or motion's from its
+    ``dims``; integrators are declared once with ``@`` for both."""
+    from sphfoam.case.schemas import SPH_FAMILIES
+
+    if family in SPH_FAMILIES:
+        from sphfoam.engine.plan import missing_dimension
+
+        try:
+            mdl = registry.build(family, {"type": cls.name})
+        except Exception:               # coefficients without defaults: not knowable here
+            return None
+        return tuple(d for d in (2, 3) if missing_dimension(mdl, d) is None)
+    if family == "integrator":
+        return (2, 3)
+    if family in ("functionObject", "motion"):
+        return tuple(getattr(cls, "dims", (2,)))
+    return None
+
+
+def dimensions_text(dims: tuple[int, ...] | None) -> str:
+    return "" if dims is None else ", ".join(f"{d}-D" for d in dims)
+
+
 def models_markdown() -> str:
     """Markdown reference of every model family and its registered models."""
     fams = registry.families()
@@ -494,7 +520,9 @@ def models_markdown() -> str:
         "# Models", "",
         "Every run-time selectable model, generated from the registry (`sphfoam/registry.py`). "
         "A model is selected by one word, `type name;`, with its coefficients beside it "
-        "(`sphfoam models [family]` prints the same list). References such as T(3.27) cite "
+        "(`sphfoam models [family]` prints the same list; *cases* says whether it runs in 2-D "
+        "and 3-D cases: a 3-D case refuses a model without a 3-D form by name). References "
+        "such as T(3.27) cite "
         "equations of the thesis sphfoam follows (T = thesis, P = paper). Where each dictionary lives: "
         "[dictionaries.md](dictionaries.md).", "",
         "Families: " + ", ".join(f"[{f}](#{f.lower()})" for f in registry.FAMILIES) + ".", "",
@@ -505,10 +533,14 @@ def models_markdown() -> str:
         if not entries:
             parts += ["_none registered yet_", ""]
             continue
+        dims = {name: dimensions_of(fam, cls) for name, cls in entries.items()}
+        with_dims = any(d is not None for d in dims.values())
         rows = [[_code(name) + "".join(f" (formerly {_code(a)})" for a in cls.aliases),
                  _cell(cls.doc), _cell(_details(cls)), _coeff_lines(cls)]
+                + ([dimensions_text(dims[name])] if with_dims else [])
                 for name, cls in entries.items()]
-        parts += [_table(["type", "description", "details", "coefficients"], rows), ""]
+        parts += [_table(["type", "description", "details", "coefficients"]
+                         + (["cases"] if with_dims else []), rows), ""]
     return "\n".join(parts).rstrip("\n") + "\n"
 
 
