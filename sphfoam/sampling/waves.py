@@ -38,6 +38,11 @@ def _label(v: float) -> str:
     return f"{v:g}"
 
 
+def _dim(ctx) -> int:
+    """The case's dimension (2 for a context that does not say)."""
+    return int(getattr(ctx, "dim", 2))
+
+
 def _fluid(sim):
     st = sim.state
     f = st.kind == FLUID
@@ -145,7 +150,7 @@ def _plane_at(px, py, pz, gx, gy) -> float:
     a = np.column_stack([np.ones(px.size), dx, dy])
     cx, cy = dx - dx.mean(), dy - dy.mean()
     spread = np.column_stack([cx, cy])
-    sv = np.linalg.svd(spread, compute_uv=False) if px.size > 1 else np.zeros(2)
+    sv = np.linalg.svd(spread, compute_uv=False)
     scale = max(float(np.abs(spread).max()), 1e-300)
     if px.size >= 3 and sv[-1] > 1e-9 * scale:
         coef = np.linalg.lstsq(a, pz, rcond=None)[0]
@@ -156,7 +161,7 @@ def _plane_at(px, py, pz, gx, gy) -> float:
     t = dx * d[0] + dy * d[1]
     if np.ptp(t) <= 1e-12 * scale:
         return float(pz.max())
-    b, c = np.polyfit(t, pz, 1)
+    _, c = np.polyfit(t, pz, 1)
     return float(c)
 
 
@@ -678,7 +683,7 @@ class WaveGauges(FunctionObject):
     def gauges(self) -> np.ndarray:
         """The gauge positions: (n,) x in 2-D, (n, 2) (x y) in 3-D."""
         c = self.coeffs
-        three = self.ctx.dim == 3
+        three = _dim(self.ctx) == 3
         own = np.asarray(c.points if three else c.x, dtype=float).reshape(-1, 2 if three
                                                                            else 1)
         if c.line is not None:
@@ -687,7 +692,7 @@ class WaveGauges(FunctionObject):
 
     def start(self, case, ctx, start_time_name):
         self.ctx = ctx
-        if ctx.dim == 3:
+        if _dim(ctx) == 3:
             self.columns = ("time",) + tuple(f"eta({_label(x)},{_label(y)})"
                                              for x, y in self.gauges())
         else:
@@ -699,7 +704,7 @@ class WaveGauges(FunctionObject):
     def execute(self, sim):
         c = self.coeffs
         st, f = _fluid(sim)
-        if self.ctx.dim == 3:
+        if _dim(self.ctx) == 3:
             self.write_row((sim.time, *self.measure_3d(st, f)))
             return
         gx = c.x if c.line is None else self.gauges()
@@ -752,7 +757,7 @@ class Probes(FunctionObject):
 
     def start(self, case, ctx, start_time_name):
         cols = ["time"]
-        comps = ("Ux", "Uy") if ctx.dim == 2 else ("Ux", "Uy", "Uz")
+        comps = ("Ux", "Uy") if _dim(ctx) == 2 else ("Ux", "Uy", "Uz")
         for pt in self.coeffs.points:
             loc = "(" + ",".join(_label(v) for v in pt) + ")"
             cols += [f"p{loc}"] + [f"{q}{loc}" for q in comps]
@@ -762,7 +767,7 @@ class Probes(FunctionObject):
     def execute(self, sim):
         _current_pressure(sim)
         pts = np.asarray(self.coeffs.points, dtype=float)
-        if self.ctx.dim == 3:
+        if _dim(self.ctx) == 3:
             from sphfoam.sampling.interp import fluid_arrays, shepard
 
             st = sim.state
