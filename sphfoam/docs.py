@@ -236,7 +236,7 @@ def _type_name(tp, meta=()) -> str:
     if _is_vector2(meta):
         return "vector (x y)"
     if _is_vector(meta):
-        return "vector (x y), 3-D (x y z)"
+        return "vector (x y) or, in 3-D, (x y z)"
     dims = _dimensions(meta)
     if dims is not None:
         return f"{_type_name(tp)} [{' '.join(map(str, dims))}]"
@@ -269,12 +269,16 @@ def _type_name(tp, meta=()) -> str:
         base, item_meta = _split(item)
         if _is_vector2(item_meta):
             return "list of vectors ((x y) ...)"
+        if _is_vector(item_meta):
+            return "list of vectors ((x y) ...) or, in 3-D, ((x y z) ...)"
         if get_origin(base) is Literal:
             return "list of: " + ", ".join(map(str, get_args(base)))
         return f"list of {_type_name(item)}"
     if origin is tuple:
         if all(a is float for a in args) and len(args) == 2:
             return "pair of floats (a b)"
+        if len(args) == 2 and args[1] is Ellipsis:
+            return f"list of {_type_name(args[0])} (a b ...)"
         return "(" + " ".join(_type_name(a) for a in args) + ")"
     if origin is dict:
         val = args[1]

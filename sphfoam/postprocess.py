@@ -6,7 +6,9 @@ object against its reference: the wave gauges against a solitary-wave theory, al
 first gauge (T Figs 4.15-4.20), with a table of the wave height at each gauge; probes and
 lines against the theory's p, u, w; run-up against the maximum run-up of theory; the crest
 against the theory's celerity and height; the dam-break front against Martin & Moyce (1952)
-and Ritter (1892); velocity profiles against their channel theory.
+and Ritter (1892); velocity profiles against their channel theory; pressure sensors and
+forces (force.dat, moment.dat) as time series; a slice's latest p and |U| on its plane.
+Every function object serves 2-D and 3-D cases alike where it has both forms.
 """
 
 from __future__ import annotations
@@ -98,6 +100,8 @@ def plot_gauges(case_dir, theory: str = "mcCowan", name: str | None = None,
         raise CaseError.single("system/controlDict", "functions",
                                "no waveGauges function object" + (f" named {name}" if name else ""))
     name, fo = next(iter(fos.items()))
+    fo.ctx = case.context
+    gpos = fo.gauges()                          # x (2-D) or (x y) rows (3-D)
     files = sorted((case.path / "postProcessing" / name).glob(f"*/{name}.dat"),
                    key=lambda p: float(p.parent.name))
     if not files:
@@ -106,7 +110,9 @@ def plot_gauges(case_dir, theory: str = "mcCowan", name: str | None = None,
     data = np.vstack([np.loadtxt(f, ndmin=2) for f in files])
     data = data[np.argsort(data[:, 0], kind="stable")]
     t, eta = data[:, 0], data[:, 1:]
-    xg = np.atleast_1d(np.asarray(fo.coeffs.x, float))
+    xg = np.atleast_1d(gpos if gpos.ndim == 1 else gpos[:, 0])    # the wave runs along x
+    where = [f"x = {v:g} m" for v in xg] if gpos.ndim == 1 else \
+        [f"(x, y) = ({a:g}, {b:g})" for a, b in gpos]
     H, d = _wave_of(case, height, depth)
     g = math.hypot(*case.context.g)
     wave = registry.build("waveTheory", {"type": theory}).solitary(H, d, g=g)
@@ -120,7 +126,7 @@ def plot_gauges(case_dir, theory: str = "mcCowan", name: str | None = None,
         theo = wave.eta(np.zeros_like(t), t=t - tt)
         ax[k].plot(t, eta[:, k], "b-", lw=1, label="sphfoam")
         ax[k].plot(t, theo, "k--", lw=1, label=f"{theory}, aligned at x = {xg[0]:g} m")
-        ax[k].set_ylabel(f"x = {x:g} m", rotation=0, ha="right", fontsize=8)
+        ax[k].set_ylabel(where[k], rotation=0, ha="right", fontsize=8)
         ax[k].grid(alpha=0.3)
         imax = int(np.nanargmax(eta[:, k])) if np.isfinite(eta[:, k]).any() else 0
         rows.append((x, float(np.nanmax(eta[:, k])), float(t[imax]), tt,
@@ -145,7 +151,7 @@ def plot_gauges(case_dir, theory: str = "mcCowan", name: str | None = None,
 # --- `sphfoam plot`: every function object against its reference -----------------------------
 #: function-object types `plot_case` draws (velocityProfile redraws its own table)
 PLOTTED = ("waveGauges", "probes", "lines", "runUp", "crestTracker", "damBreakFront",
-           "velocityProfile")
+           "velocityProfile", "pressureSensors", "forces", "slices")
 
 
 def _pyplot():
@@ -196,9 +202,10 @@ def _save(fig, png: Path) -> Path:
 
 
 def plot_probes(case: Case, name: str, fo, wave, theory: str) -> Path | None:
-    """p, Ux, Uy at each probe against time; with a solitary wave, the theory's p, u, w at
-    the probe, z measured from the bottom of the first fluid region (crest aligned with the
-    first probe's pressure peak, the theory's celerity thereafter)."""
+    """p, Ux, Uy (and Uz in 3-D) at each probe against time; with a solitary wave, the
+    theory's p, u, w at the probe (w against the vertical component), z measured from the
+    bottom of the first fluid region (crest aligned with the first probe's pressure peak,
+    the theory's celerity thereafter)."""
     s = _series(case, name)
     if s is None:
         return None
@@ -206,28 +213,37 @@ def plot_probes(case: Case, name: str, fo, wave, theory: str) -> Path | None:
     plt = _pyplot()
     pts = np.asarray(fo.coeffs.points, float)
     t = data[:, 0]
-    fig, ax = plt.subplots(len(pts), 3, figsize=(12, 2.2 * len(pts) + 0.8), sharex=True,
-                           squeeze=False)
+    dim = pts.shape[1]
+    comps = (("p", "Pa"), ("Ux", "m/s"), ("Uy", "m/s")) + ((("Uz", "m/s"),) if dim == 3 else ())
+    vertical = comps[-1][0]
+    fig, ax = plt.subplots(len(pts), len(comps), figsize=(4 * len(comps), 2.2 * len(pts) + 0.8),
+                           sharex=True, squeeze=False)
     t_peak = None
     region = next(iter(case.particles.fluid.values()))
-    bed = region.min[1] if hasattr(region, "min") else min(p[1] for p in region.points)
-    for k, (px, py) in enumerate(pts):
-        vals = data[:, 1 + 3 * k:4 + 3 * k]
+    up = dim - 1
+    bed = region.min[up] if hasattr(region, "min") else min(p[1] for p in region.points)
+    for k, pt in enumerate(pts):
+        px, py = pt[0], pt[up]
+        n = len(comps)
+        vals = data[:, 1 + n * k:1 + n * (k + 1)]
         if wave is not None and t_peak is None and np.isfinite(vals[:, 0]).any():
             t_peak, x_peak = t[int(np.nanargmax(vals[:, 0]))], px
-        for j, (q, unit) in enumerate((("p", "Pa"), ("Ux", "m/s"), ("Uy", "m/s"))):
+        for j, (q, unit) in enumerate(comps):
             a = ax[k, j]
             a.plot(t, vals[:, j], "b-", lw=1, label="sphfoam")
             if wave is not None and t_peak is not None:
                 tt = t - t_peak - (px - x_peak) / wave[0].c
                 x = np.full_like(t, px)
                 z = np.full_like(t, py - bed)
-                ref = {"p": wave[0].p, "Ux": wave[0].u, "Uy": wave[0].w}[q](x, z, t=tt, x0=px)
-                a.plot(t, ref, "k--", lw=1, label=f"{theory}, H = {wave[1]:g} m")
+                ref = {"p": wave[0].p, "Ux": wave[0].u, vertical: wave[0].w}.get(q)
+                if ref is not None:
+                    a.plot(t, ref(x, z, t=tt, x0=px), "k--", lw=1,
+                           label=f"{theory}, H = {wave[1]:g} m")
             a.set_ylabel(f"{q} ({unit})")
             a.grid(alpha=0.3)
             if j == 0:
-                a.set_title(f"probe ({px:g}, {py:g})", fontsize=9, loc="left")
+                a.set_title("probe (" + ", ".join(f"{v:g}" for v in pt) + ")", fontsize=9,
+                            loc="left")
     ax[0, 0].legend(fontsize=8)
     for a in ax[-1]:
         a.set_xlabel("t (s)")
@@ -366,6 +382,103 @@ def plot_crest(case: Case, name: str, fo, wave, theory: str) -> Path | None:
     return _save(fig, folder / f"{name}.png")
 
 
+def plot_sensors(case: Case, name: str, fo) -> Path | None:
+    """Pressure at each sensor against time (no reference: a case's own measurements are
+    drawn by its tutorial's scripts)."""
+    s = _series(case, name)
+    if s is None:
+        return None
+    cols, data, folder = s
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(9, 4))
+    for k, c in enumerate(cols[1:], start=1):
+        ax.plot(data[:, 0], data[:, k], lw=1, label=c)
+    ax.set(xlabel="t (s)", ylabel="p (Pa)",
+           title=f"{case.name}: {name} (pressureSensors, offset {fo.coeffs.offset:g} dx)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(fig, folder / f"{name}.png")
+
+
+def plot_forces(case: Case, name: str, fo) -> Path | None:
+    """Force and moment components against time: total (solid), pressure (dashed), viscous
+    (dotted), from force.dat and moment.dat."""
+    s = _series(case, name, "force.dat")
+    m = _series(case, name, "moment.dat")
+    if s is None or m is None:
+        return None
+    plt = _pyplot()
+    fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    span = " per metre" if case.dimension == 2 else ""
+    for a, (cols, data, _), what in ((ax[0], s, f"force (N{span})"),
+                                     (ax[1], m, f"moment (N m{span})")):
+        for j, comp in enumerate("xyz"):
+            col = f"C{j}"
+            for part, style in (("total", "-"), ("pressure", "--"), ("viscous", ":")):
+                y = data[:, cols.index(f"{part}_{comp}")]
+                if part != "total" and not np.any(y):
+                    continue
+                a.plot(data[:, 0], y, style, color=col, lw=1, label=f"{part}_{comp}")
+        a.set_ylabel(what)
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7, ncol=3)
+    ax[-1].set_xlabel("t (s)")
+    fig.suptitle(f"{case.name}: {name} (forces on {' '.join(fo.coeffs.patches)})")
+    return _save(fig, s[2] / f"{name}.png")
+
+
+def read_vts(path: Path) -> tuple[np.ndarray, tuple[int, int], dict[str, np.ndarray]]:
+    """(points (n, 3), (n1, n2), point fields) of a .vts written by ``slices``."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    piece = root.find("StructuredGrid/Piece")
+    ext = [int(v) for v in piece.get("Extent").split()]
+    shape = (ext[1] + 1, ext[3] + 1)
+
+    def arr(el):
+        a = np.array(el.text.split(), dtype=float)
+        k = int(el.get("NumberOfComponents", "1"))
+        return a if k == 1 else a.reshape(-1, k)
+
+    fields = {el.get("Name"): arr(el) for el in piece.find("PointData")}
+    return arr(piece.find("Points/DataArray")), shape, fields
+
+
+def plot_slices(case: Case, name: str, fo) -> Path | None:
+    """The pressure and speed on the plane at the latest sampled time (NaN, outside the
+    water, left blank)."""
+    from sphfoam.io.tables import start_folders
+
+    found = []
+    for _, folder in start_folders(case.path, name):
+        for sub in folder.iterdir():
+            f = sub / f"{name}.vts"
+            if f.is_file():
+                try:
+                    found.append((float(sub.name), f, folder))
+                except ValueError:
+                    continue
+    if not found:
+        return None
+    t, f, folder = max(found, key=lambda r: r[0])
+    _, (n1, n2), fields = read_vts(f)
+    c = fo.coeffs
+    half = (0.5 * (n1 - 1) * (c.spacing or case.particles.dx),
+            0.5 * (n2 - 1) * (c.spacing or case.particles.dx))
+    plt = _pyplot()
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.5))
+    speed = np.linalg.norm(fields["U"], axis=1)
+    for a, vals, what in ((ax[0], fields["p"], "p (Pa)"), (ax[1], speed, "|U| (m/s)")):
+        im = a.imshow(vals.reshape(n2, n1), origin="lower", aspect="equal",
+                      extent=(-half[0], half[0], -half[1], half[1]))
+        fig.colorbar(im, ax=a, label=what)
+        a.set(xlabel="s1 along e1 (m)", ylabel="s2 along e2 (m)")
+    fig.suptitle(f"{case.name}: {name} (slices) at t = {t:g} s, point "
+                 f"{tuple(c.point)}, normal {tuple(c.normal)}")
+    return _save(fig, folder / f"{name}.png")
+
+
 def plot_dam_break(case: Case, name: str, fo) -> Path | None:
     """Z(T) and H(T) against Martin & Moyce (1952) and Ritter's (1892) dry-bed front
     Z = 1 + 2T (the front of the shallow-water solution runs at 2 sqrt(g H0))."""
@@ -466,6 +579,12 @@ def plot_case(case_dir, names: list[str] | None = None, theory: str = "mcCowan",
             png = plot_dam_break(case, name, fo)
         elif kind == "velocityProfile":
             png = plot_profile(case, name, fo)
+        elif kind == "pressureSensors":
+            png = plot_sensors(case, name, fo)
+        elif kind == "forces":
+            png = plot_forces(case, name, fo)
+        elif kind == "slices":
+            png = plot_slices(case, name, fo)
         else:                                  # a type plot does not know: say so
             log(f"{name}: no plot for function objects of type {kind}")
             continue

@@ -79,7 +79,7 @@ MODEL_MODULES = (
     "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.study.metrics",
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
     "sphfoam.models.diffusion", "sphfoam.models.shifting", "sphfoam.sampling.beach",
-    "sphfoam.study.beach_metrics",
+    "sphfoam.study.beach_metrics", "sphfoam.sampling.loads", "sphfoam.sampling.slices",
 )
 
 
@@ -176,12 +176,13 @@ def families() -> dict[str, dict[str, type[Model]]]:
     return {f: _ordered(f) for f in _REGISTRY}
 
 
-def build(family: str, spec: dict[str, Any]) -> Model:
-    """Instantiate ``spec['type']`` of ``family`` with the remaining keys as coefficients.
+def build(family: str, spec: dict[str, Any], context: dict | None = None) -> Model:
+    """Instantiate ``spec['type']`` of ``family`` with the remaining keys as coefficients
+    (validated with ``context``, e.g. ``{"dim": 3}``: the case's dimension).
 
     Raises :class:`UnknownModel` or pydantic's ``ValidationError`` (the case layer turns both
     into one-screen messages naming the file and key path).
     """
     spec = dict(spec)
     cls = get(family, str(spec.pop("type")))
-    return cls(cls.Coeffs.model_validate(spec))
+    return cls(cls.Coeffs.model_validate(spec, context=context))

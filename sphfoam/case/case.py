@@ -195,7 +195,7 @@ class Case:
         functions = {}
         for name, spec in self.control.functions.items():
             fo = build_model("functionObject", spec, FILES["controlDict"][0],
-                             f"functions.{name}", problems)
+                             f"functions.{name}", problems, {"dim": self.dimension})
             if fo is not None and self.dimension not in getattr(fo, "dims", (2,)):
                 problems.append(Problem(FILES["controlDict"][0], f"functions.{name}.type",
                                         f"functionObject {fo.name!r} has no "
@@ -261,7 +261,7 @@ class Case:
                                    "speed of sound is not positive; set vmax or speedOfSound")
 
 
-def build_model(family, spec, file, key, problems):
+def build_model(family, spec, file, key, problems, context=None):
     """Build ``spec`` (``{type name; coeffs}``) of ``family`` from ``file`` at ``key``; problems
     (not a sub-dictionary, unknown type, bad coefficients) are appended to ``problems`` and
     give None."""
@@ -270,7 +270,7 @@ def build_model(family, spec, file, key, problems):
                                 f"registered: {', '.join(registry.names(family))}"))
         return None
     try:
-        return registry.build(family, spec)
+        return registry.build(family, spec, context)
     except registry.UnknownModel as e:
         problems.append(Problem(file, f"{key}.type", str(e)))
     except ValidationError as e:

@@ -27,6 +27,8 @@ class FunctionObject(Model, abc.ABC):
     columns: tuple[str, ...] = ()
     #: the case dimensions it samples (a 3-D case refuses one without 3 by name)
     dims: tuple[int, ...] = (2,)
+    #: further ``#`` header lines written before the column names (e.g. where sensors read)
+    notes: tuple[str, ...] = ()
 
     def start(self, case, ctx, start_time_name: str) -> None:
         self.case, self.ctx = case, ctx
@@ -34,7 +36,9 @@ class FunctionObject(Model, abc.ABC):
         self.folder.mkdir(parents=True, exist_ok=True)
         self.file = self.folder / f"{self.object_name}.dat"
         self._fh = self.file.open("w")
-        self._fh.write(f"# {self.name}: {self.doc}\n# " + "\t".join(self.columns) + "\n")
+        self._fh.write(f"# {self.name}: {self.doc}\n"
+                       + "".join(f"# {n}\n" for n in self.notes)
+                       + "# " + "\t".join(self.columns) + "\n")
 
     @property
     def schedule(self) -> Schedule:

@@ -18,9 +18,10 @@ from typing import Literal
 
 import numpy as np
 from numba import njit
-from pydantic import Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, \
+    model_validator
 
-from sphfoam.case.schemas import Vector2
+from sphfoam.case.schemas import Vector, Vector2, case_dimension
 from sphfoam.engine.state import FLUID
 from sphfoam.registry import register
 from sphfoam.sampling.base import FunctionObject, FunctionObjectCoeffs
@@ -35,6 +36,11 @@ def _as_list(v):
 
 def _label(v: float) -> str:
     return f"{v:g}"
+
+
+def _dim(ctx) -> int:
+    """The case's dimension (2 for a context that does not say)."""
+    return int(getattr(ctx, "dim", 2))
 
 
 def _fluid(sim):
@@ -95,6 +101,163 @@ def surface_elevation(x_particles, y_particles, gauges_x, dx, *, still: float = 
     top = _gauge_tops(np.ascontiguousarray(x), np.ascontiguousarray(y), np.ascontiguousarray(g),
                       lo, mid, hi)
     return top + 0.5 * dx - still
+
+
+# --- the free-surface gauge in 3-D: T §4.3.2 on four quadrants ---------------------------------
+@njit(cache=True)
+def _quadrant_tops(xs, ys, zs, gx, gy, lo, hi, half):
+    """For each gauge (gx, gy), the highest of the x-sorted particles lo..hi in each of the
+    four quadrants of the square |x - gx| <= half, |y - gy| <= half split at the gauge as
+    the 2-D gauge splits its window ([g - half, g) and [g, g + half] along x and along y);
+    ties go to the particle nearest the gauge. Returns (z, x, y) of each (nGauges, 4); z is
+    -inf for an empty quadrant."""
+    n = gx.size
+    tz = np.full((n, 4), -np.inf)
+    tx = np.zeros((n, 4))
+    ty = np.zeros((n, 4))
+    for g in range(n):
+        for i in range(lo[g], hi[g]):
+            ddy = ys[i] - gy[g]
+            if ddy < -half or ddy > half:
+                continue
+            ddx = xs[i] - gx[g]
+            q = (1 if ddx >= 0.0 else 0) + (2 if ddy >= 0.0 else 0)
+            d2 = ddx * ddx + ddy * ddy
+            if zs[i] > tz[g, q]:
+                take = True
+            elif zs[i] == tz[g, q]:
+                ex = tx[g, q] - gx[g]
+                ey = ty[g, q] - gy[g]
+                take = d2 < ex * ex + ey * ey
+            else:
+                take = False
+            if take:
+                tz[g, q] = zs[i]
+                tx[g, q] = xs[i]
+                ty[g, q] = ys[i]
+    return tz, tx, ty
+
+
+def _plane_at(px, py, pz, gx, gy) -> float:
+    """The height at (gx, gy) of the least-squares plane through the points (px, py, pz)
+    (the 2-D gauge's straight line, one dimension up): one point gives its height; points
+    on one line (two points, or more in a row) the straight line through them along that
+    line, evaluated at the gauge's projection on it (the highest of them if they stand at
+    one place)."""
+    if px.size == 1:
+        return float(pz[0])
+    dx, dy = px - gx, py - gy
+    a = np.column_stack([np.ones(px.size), dx, dy])
+    cx, cy = dx - dx.mean(), dy - dy.mean()
+    spread = np.column_stack([cx, cy])
+    sv = np.linalg.svd(spread, compute_uv=False)
+    scale = max(float(np.abs(spread).max()), 1e-300)
+    if px.size >= 3 and sv[-1] > 1e-9 * scale:
+        coef = np.linalg.lstsq(a, pz, rcond=None)[0]
+        return float(coef[0])
+    # collinear: the straight line along their common direction
+    _, _, vt = np.linalg.svd(spread)
+    d = vt[0]
+    t = dx * d[0] + dy * d[1]
+    if np.ptp(t) <= 1e-12 * scale:
+        return float(pz.max())
+    _, c = np.polyfit(t, pz, 1)
+    return float(c)
+
+
+def surface_elevation_3d(x, y, z, gauges, dx, *, still: float = 0.0,
+                         window: float = GAUGE_WINDOW) -> np.ndarray:
+    """Free-surface elevation at the horizontal points ``gauges`` ((x y) rows) of a 3-D case
+    (z up), the gauge of T §4.3.2 extended to a horizontal plane: the 2-D gauge's window
+    [x_g - delta, x_g) | [x_g, x_g + delta] becomes the four quadrants of the square
+    |x - x_g| <= delta, |y - y_g| <= delta (delta = ``window`` dx, 2.5 dx) split at the
+    gauge; the highest fluid particle of each (ties: the one nearest the gauge); the
+    least-squares plane through those tops evaluated at the gauge (with tops on one line,
+    the straight line through them, as the 2-D gauge joins its two); plus dx/2 (the top of
+    that particle's cell), minus ``still``. An extruded 2-D case (uniform across y) reads
+    what the 2-D gauge reads. NaN with no particle in the square."""
+    x = np.asarray(x, dtype=float)
+    g = np.atleast_2d(np.asarray(gauges, dtype=float))
+    order = np.argsort(x, kind="stable")
+    xs = np.ascontiguousarray(x[order])
+    ys = np.ascontiguousarray(np.asarray(y, dtype=float)[order])
+    zs = np.ascontiguousarray(np.asarray(z, dtype=float)[order])
+    half = window * dx
+    gx, gy = np.ascontiguousarray(g[:, 0]), np.ascontiguousarray(g[:, 1])
+    lo = np.searchsorted(xs, gx - half, side="left")
+    hi = np.searchsorted(xs, gx + half, side="right")
+    tz, tx, ty = _quadrant_tops(xs, ys, zs, gx, gy, lo, hi, half)
+    out = np.full(len(g), np.nan)
+    for k in range(len(g)):
+        ok = np.isfinite(tz[k])
+        if ok.any():
+            out[k] = _plane_at(tx[k, ok], ty[k, ok], tz[k, ok], gx[k], gy[k])
+    return out + 0.5 * dx - still
+
+
+@njit(cache=True)
+def _phi3(xq, yq, zq, cx, cy, cz, cv, inv_h, w0, support, kernel_f):
+    s = 0.0
+    for i in range(cx.size):
+        a = xq - cx[i]
+        b = yq - cy[i]
+        c = zq - cz[i]
+        q = math.sqrt(a * a + b * b + c * c) * inv_h
+        if q < support:
+            s += cv[i] * kernel_f(q)
+    return s * w0
+
+
+@njit(cache=True)
+def _column_crossing(cx, cy, cz, cv, gx, gy, z0, length, step, inv_h, w0, support, kernel_f,
+                     level):
+    """The first depth t below z0 (0 <= t <= length) on the vertical through (gx, gy) where
+    the fluid fraction of the column's particles reaches ``level`` (marching by ``step``,
+    then bisection); NaN if never."""
+    if _phi3(gx, gy, z0, cx, cy, cz, cv, inv_h, w0, support, kernel_f) >= level:
+        return 0.0
+    a = 0.0
+    while a < length:
+        b = min(a + step, length)
+        if _phi3(gx, gy, z0 - b, cx, cy, cz, cv, inv_h, w0, support, kernel_f) >= level:
+            for _ in range(60):
+                m = 0.5 * (a + b)
+                if _phi3(gx, gy, z0 - m, cx, cy, cz, cv, inv_h, w0, support,
+                         kernel_f) >= level:
+                    b = m
+                else:
+                    a = m
+                if b - a <= 1e-12 * step:
+                    break
+            return 0.5 * (a + b)
+        a = b
+    return np.nan
+
+
+def fraction_surface_3d(x, y, z, vol, gauges, kernel, h, dx, *, still: float = 0.0,
+                        level: float = 0.5) -> np.ndarray:
+    """Sub-particle free-surface elevation of a 3-D case at the horizontal points
+    ``gauges``: the highest z on the vertical through (x_g, y_g) where the SPH fluid
+    fraction sum_b V_b W(r - r_b) (the 3-D kernel, alpha_3d / h^3) reaches 1/2, searched
+    down from one support above the highest particle within a horizontal support of the
+    gauge (dx/4 steps, then bisection), minus ``still``; NaN with no fluid within reach.
+    The 2-D ``fraction_surface`` on a vertical line instead of a vertical plane's line."""
+    x, y, z, vol = (np.asarray(a, dtype=float) for a in (x, y, z, vol))
+    g = np.atleast_2d(np.asarray(gauges, dtype=float))
+    out = np.full(len(g), np.nan)
+    reach = float(kernel.support) * h
+    for k, (gx, gy) in enumerate(g):
+        near = (x - gx) ** 2 + (y - gy) ** 2 < reach * reach
+        if not near.any():
+            continue
+        cx, cy, cz, cv = (np.ascontiguousarray(a[near]) for a in (x, y, z, vol))
+        z0 = float(cz.max()) + reach
+        t = _column_crossing(cx, cy, cz, cv, float(gx), float(gy), z0,
+                             z0 - (float(cz.min()) - reach), 0.25 * dx, 1.0 / h,
+                             kernel.alpha(3) / h**3, float(kernel.support), kernel.f_jit,
+                             float(level))
+        out[k] = z0 - t
+    return out - still
 
 
 # --- sub-particle surface: the SPH fluid fraction crosses 1/2 (issue 13) ------------------------
@@ -419,30 +582,80 @@ def _sample_fluid(sim, case, ctx, xq, yq) -> np.ndarray:
 
 
 # --- waveGauges --------------------------------------------------------------------------------
+def _horizontal(v, info: ValidationInfo):
+    """A horizontal position: x in a 2-D case (a number, or (x)), (x y) in a 3-D case."""
+    dim = case_dimension(info)
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        v = [v]
+    if (isinstance(v, (list, tuple)) and len(v) == dim - 1
+            and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in v)):
+        return tuple(float(c) for c in v)
+    raise ValueError(f"expected a horizontal position ({'x' if dim == 2 else '(x y)'}) in a "
+                     f"{dim}-D case, got {v!r}")
+
+
+class GaugeLine(BaseModel):
+    """A line of gauges: ``nPoints`` gauges evenly spaced from ``start`` to ``end`` (both
+    included): x in 2-D, (x y) in 3-D."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    start: tuple[float, ...] = Field(description="first gauge: x (2-D) or (x y) (3-D)")
+    end: tuple[float, ...] = Field(description="last gauge: x (2-D) or (x y) (3-D)")
+    nPoints: int = Field(ge=2, description="gauges on the line, ends included")
+
+    _pos = field_validator("start", "end", mode="before")(_horizontal)
+
+    def positions(self) -> np.ndarray:
+        """(nPoints, dim - 1) positions."""
+        a, b = np.asarray(self.start), np.asarray(self.end)
+        t = np.linspace(0.0, 1.0, self.nPoints)[:, None]
+        return a[None, :] + t * (b - a)[None, :]
+
+
 @register
 class WaveGauges(FunctionObject):
     """Free-surface elevation eta(t) at a set of wave gauges, the SPH wave gauge of T §4.3.2.
 
-    At each gauge the highest fluid particle within delta x = 2.5 dx on either side
-    ([x_g - delta x, x_g) and [x_g, x_g + delta x]) is found and the two are joined by a
+    2-D (``x``): at each gauge the highest fluid particle within delta x = 2.5 dx on either
+    side ([x_g - delta x, x_g) and [x_g, x_g + delta x]) is found and the two are joined by a
     straight line evaluated at x_g (T Fig 4.1); dx/2 is added (the top of the particle's cell,
     as in ``damBreakFront``) so that water at rest reads its true level, and ``still`` is
     subtracted. A gauge with fluid on one side only reads that particle; with none, NaN.
     With ``surface fraction`` the gauge is sub-particle instead: the highest y on the vertical
     where the SPH fluid fraction sum_b V_b W(r - r_b) reaches 1/2 (``fraction_surface``);
     with ``surface volume`` it is the bed plus the column's water volume (``ColumnSurface``).
+
+    3-D (``points``, (x y) with z up): the same gauge on the horizontal plane
+    (``surface_elevation_3d``): the highest fluid particle in each quadrant of the square
+    |x - x_g|, |y - y_g| <= delta x around the gauge, the least-squares plane through those
+    tops evaluated at the gauge (the 2-D straight line, one dimension up; an extruded 2-D
+    case reads as the 2-D gauge), + dx/2 - ``still``. ``surface fraction``: the highest z on
+    the vertical through the gauge where the 3-D fluid fraction reaches 1/2
+    (``fraction_surface_3d``). ``surface volume`` has no 3-D form (refused).
+
+    ``line`` adds a line of evenly spaced gauges (in 2-D from x = start to end, in 3-D from
+    (x y) start to end), after those of ``x`` / ``points``. Columns: ``eta(x)`` in 2-D,
+    ``eta(x,y)`` in 3-D.
     """
 
     name = "waveGauges"
     doc = "free-surface elevation eta(t) at wave gauges: highest particle within 2.5 dx either " \
-          "side, interpolated linearly, T §4.3.2"
+          "side, interpolated linearly, T §4.3.2 (3-D: at (x y) points, four quadrants)"
+    dims = (2, 3)
 
     class Coeffs(_GaugeSurfaceCoeffs):
-        x: list[float] = Field(min_length=1, description=(
-            "gauge positions (m), e.g. `(1 2 4 6 8)` (T §4.3.2 used x = 1, 2 m and then every "
-            "2 m up to 20 m from the paddle)"))
+        x: list[float] = Field(default_factory=list, description=(
+            "2-D: gauge positions (m), e.g. `(1 2 4 6 8)` (T §4.3.2 used x = 1, 2 m and then "
+            "every 2 m up to 20 m from the paddle)"))
+        points: list[tuple[float, float]] = Field(default_factory=list, description=(
+            "3-D: gauge positions `((x1 y1) (x2 y2) ...)` (m) on the horizontal plane "
+            "(z is up)"))
+        line: GaugeLine | None = Field(None, description=(
+            "a line of gauges `{ start <x | (x y)>; end <x | (x y)>; nPoints <n>; }`, "
+            "added after `x` / `points`"))
         still: float = Field(0.0, description=(
-            "still-water level (m): eta = surface y - still (0: eta is the surface y itself)"))
+            "still-water level (m): eta = surface height - still (0: eta is the surface "
+            "height itself)"))
         window: float = Field(GAUGE_WINDOW, gt=0, description=(
             "half-width delta x of the search windows either side of a gauge, in dx "
             "(2.5 in T §4.3.2)"))
@@ -452,8 +665,38 @@ class WaveGauges(FunctionObject):
         def _one(cls, v):
             return _as_list(v)
 
+        @model_validator(mode="after")
+        def _gauges(self, info: ValidationInfo):
+            dim = case_dimension(info)
+            if dim == 2 and self.points:
+                raise ValueError("points (x y) are the gauges of a 3-D case: a 2-D case "
+                                 "gives x")
+            if dim == 3 and self.x:
+                raise ValueError("a 3-D case's gauges are points ((x y) ...) on the "
+                                 "horizontal plane, not x")
+            if dim == 3 and self.surface == "volume":
+                raise ValueError("surface volume has no 3-D form: use particle or fraction")
+            if not (self.x or self.points or self.line):
+                raise ValueError("give the gauges: x (2-D), points (3-D) or a line")
+            return self
+
+    def gauges(self) -> np.ndarray:
+        """The gauge positions: (n,) x in 2-D, (n, 2) (x y) in 3-D."""
+        c = self.coeffs
+        three = _dim(self.ctx) == 3
+        own = np.asarray(c.points if three else c.x, dtype=float).reshape(-1, 2 if three
+                                                                           else 1)
+        if c.line is not None:
+            own = np.vstack([own, c.line.positions()])
+        return own if three else own[:, 0]
+
     def start(self, case, ctx, start_time_name):
-        self.columns = ("time",) + tuple(f"eta({_label(x)})" for x in self.coeffs.x)
+        self.ctx = ctx
+        if _dim(ctx) == 3:
+            self.columns = ("time",) + tuple(f"eta({_label(x)},{_label(y)})"
+                                             for x, y in self.gauges())
+        else:
+            self.columns = ("time",) + tuple(f"eta({_label(x)})" for x in self.gauges())
         super().start(case, ctx, start_time_name)
         self.column = (ColumnSurface(self, self.coeffs.volumeWidth)
                        if self.coeffs.surface == "volume" else None)
@@ -461,17 +704,32 @@ class WaveGauges(FunctionObject):
     def execute(self, sim):
         c = self.coeffs
         st, f = _fluid(sim)
+        if _dim(self.ctx) == 3:
+            self.write_row((sim.time, *self.measure_3d(st, f)))
+            return
+        gx = c.x if c.line is None else self.gauges()
         if c.surface == "volume":
-            eta = self.column.surface(st.x[f], st.y[f], _fluid_volumes(st, f), c.x,
+            eta = self.column.surface(st.x[f], st.y[f], _fluid_volumes(st, f), gx,
                                       still=c.still)
         elif c.surface == "fraction":
-            eta = fraction_surface(st.x[f], st.y[f], _fluid_volumes(st, f), c.x,
+            eta = fraction_surface(st.x[f], st.y[f], _fluid_volumes(st, f), gx,
                                    self.case.models.sph["kernel"], self.ctx.h, self.ctx.dx,
                                    still=c.still)
         else:
-            eta = surface_elevation(st.x[f], st.y[f], c.x, self.ctx.dx, still=c.still,
+            eta = surface_elevation(st.x[f], st.y[f], gx, self.ctx.dx, still=c.still,
                                     window=c.window)
         self.write_row((sim.time, *eta))
+
+    def measure_3d(self, st, f) -> np.ndarray:
+        c, g = self.coeffs, self.gauges()
+        if not f.any():
+            return np.full(len(g), np.nan)
+        if c.surface == "fraction":
+            return fraction_surface_3d(st.x[f], st.y[f], st.z[f], _fluid_volumes(st, f), g,
+                                       self.case.models.sph["kernel"], self.ctx.h,
+                                       self.ctx.dx, still=c.still)
+        return surface_elevation_3d(st.x[f], st.y[f], st.z[f], g, self.ctx.dx,
+                                    still=c.still, window=c.window)
 
 
 # --- probes ------------------------------------------------------------------------------------
@@ -484,28 +742,40 @@ class Probes(FunctionObject):
     Shepard filter T(3.69): constant fields stay exact near the free surface and walls, where
     the kernel support is truncated). The pressure is brought up to date with the equation of
     state first. A point with no fluid particle within the kernel support gives NaN.
+    2-D: points (x y), columns p, Ux, Uy per point; 3-D: points (x y z), columns p, Ux, Uy,
+    Uz (the same interpolant over the 3-D kernel's sphere, ``sampling.interp.shepard``).
     """
 
     name = "probes"
     doc = "SPH-interpolated (Shepard-normalised) pressure and velocity at fixed points, " \
           "T(3.8), T(3.69)"
+    dims = (2, 3)
 
     class Coeffs(FunctionObjectCoeffs):
-        points: list[Vector2] = Field(min_length=1, description=(
-            "probe locations `((x1 y1) (x2 y2) ...)` (m)"))
+        points: list[Vector] = Field(min_length=1, description=(
+            "probe locations `((x1 y1) (x2 y2) ...)` (m); `((x1 y1 z1) ...)` in 3-D"))
 
     def start(self, case, ctx, start_time_name):
         cols = ["time"]
-        for px, py in self.coeffs.points:
-            loc = f"({_label(px)},{_label(py)})"
-            cols += [f"p{loc}", f"Ux{loc}", f"Uy{loc}"]
+        comps = ("Ux", "Uy") if _dim(ctx) == 2 else ("Ux", "Uy", "Uz")
+        for pt in self.coeffs.points:
+            loc = "(" + ",".join(_label(v) for v in pt) + ")"
+            cols += [f"p{loc}"] + [f"{q}{loc}" for q in comps]
         self.columns = tuple(cols)
         super().start(case, ctx, start_time_name)
 
     def execute(self, sim):
         _current_pressure(sim)
         pts = np.asarray(self.coeffs.points, dtype=float)
-        vals = _sample_fluid(sim, self.case, self.ctx, pts[:, 0], pts[:, 1])
+        if _dim(self.ctx) == 3:
+            from sphfoam.sampling.interp import fluid_arrays, shepard
+
+            st = sim.state
+            f, pos, vol = fluid_arrays(st, 3)
+            vals, _ = shepard(pos, vol, np.stack([st.p[f], st.u[f], st.v[f], st.w[f]]), pts,
+                              self.case.models.sph["kernel"], self.ctx.h, 3)
+        else:
+            vals = _sample_fluid(sim, self.case, self.ctx, pts[:, 0], pts[:, 1])
         self.write_row((sim.time, *vals.T.ravel()))
 
 
