@@ -241,3 +241,26 @@ walls
     assert np.allclose(st.u[paddle], mot.velocity(sim.time)[0], rtol=0, atol=1e-12)
     assert np.array_equal(st.x[tank], st.extra["x0"][tank])
     assert not sim.pipeline.selection.still_walls
+
+
+def test_a_2d_block_wall_gets_its_rows_inside_and_the_fluid_outside(tmp_path):
+    """``type block`` works in 2-D as in 3-D: rows of wall particles inside its edges, the
+    fluid outside, half a spacing off."""
+    from sphfoam.setup.initial import generate_case
+
+    case = _copy(tmp_path)
+    _edit(case / "constant" / "g", r"\(0 0 -9.81\)", "(0 -9.81)")
+    _particle_dict(case, """dx 0.02;
+fluid { water { type box; min (0 0); max (1 0.4); } }
+walls
+{
+    tank  { type box; min (0 0); max (1 0.6); layers 3; open top; }
+    block { type block; min (0.4 0); max (0.6 0.2); layers 2; }
+}
+""")
+    st = generate_case(Case(case))
+    inside = (st.x > 0.4) & (st.x < 0.6) & (st.y > 0) & (st.y < 0.2)
+    assert not (inside & (st.kind == 0)).any()
+    ring = inside & (np.minimum.reduce([st.x - 0.4, 0.6 - st.x, 0.2 - st.y, st.y]) < 0.04)
+    assert (st.kind[ring] == 1).all() and ring.sum() == 2 * (10 + 10 + 6 + 6)
+    assert not (inside & ~ring).any()                  # two rows, nothing further in

@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.path import Path as MplPath
 from scipy.spatial import cKDTree
 
-from sphfoam.case.schemas import BoxRegion, BoxWalls, ParticleDict
+from sphfoam.case.schemas import BlockWalls, BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models.mirror import line_distance, segment_array
 from sphfoam.case.geometry import (LATTICE_TOLERANCE, distance_to_walls, fluid_side,
@@ -200,8 +200,9 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         pw = np.concatenate([np.full(len(p[0]), i) for i, p in enumerate(wall_pieces)])
         keep = _first_of_duplicates(xw, yw, 0.5 * dx)
         xw, yw, pw = xw[keep], yw[keep], pw[keep]
-        uw = np.array([walls[i].velocity[0] for i in pw])
-        vw = np.array([walls[i].velocity[1] for i in pw])
+        vel = np.array([tuple(getattr(w, "velocity", (0.0, 0.0))) for w in walls],
+                       float).reshape(len(walls), 2)
+        uw, vw = vel[pw, 0], vel[pw, 1]
     else:
         xw = yw = uw = vw = np.zeros(0)
         pw = np.zeros(0, dtype=np.int64)
@@ -210,6 +211,12 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]))
         ok = d >= 0.5 * dx * (1 - LATTICE_TOLERANCE)
         xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
+    for r in walls:                       # nor inside a solid block (beyond its rows)
+        if isinstance(r, BlockWalls) and xf.size:
+            m = 0.5 * dx * (1 - LATTICE_TOLERANCE)
+            ok = ~((xf > r.min[0] - m) & (xf < r.max[0] + m) & (yf > r.min[1] - m)
+                   & (yf < r.max[1] + m))
+            xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     if segs and xf.size:
         # ... or to a wall line (walls without particles, e.g. mirrored ghosts). A wave's
         # column (sphfoam.setup.waves.wave_columns) holds n = round((d + eta)/dx) particles
