@@ -536,6 +536,55 @@ def plot_profile(case: Case, name: str, fo) -> Path | None:
     return _save(fig, folder / f"{name}.png")
 
 
+def _measured_columns(case: Case) -> dict[str, list]:
+    """Function object -> the measured-series metrics of system/metricsDict that read it
+    (``measuredRMS``, ``measuredPeak``: sphfoam.study.measured_metrics), if the case has
+    a metricsDict."""
+    if not (case.path / "system" / "metricsDict").is_file():
+        return {}
+    from sphfoam.case.metrics_dict import load_metrics
+    from sphfoam.study.measured_metrics import _Measured
+
+    out: dict[str, list] = {}
+    for m in load_metrics(case.path).metrics.values():
+        if isinstance(m, _Measured):
+            out.setdefault(m.coeffs.function, []).append(m)
+    return out
+
+
+def plot_measured(case: Case, name: str, metrics: list) -> Path | None:
+    """Each column of ``name`` a measured-series metric reads, against the measurement (the
+    metric's file and column), one panel per column over the metrics' widest window."""
+    s = _series(case, name)
+    if s is None:
+        return None
+    cols, data, folder = s
+    seen: dict[str, object] = {}
+    for m in metrics:
+        seen.setdefault(m.coeffs.column, m)
+    plt = _pyplot()
+    fig, ax = plt.subplots(len(seen), 1, figsize=(9, 1.6 * len(seen) + 1), sharex=True,
+                           squeeze=False)
+    t0 = min(m.coeffs.window[0] for m in metrics)
+    t1 = max(m.coeffs.window[1] for m in metrics)
+    for a, (col, m) in zip(ax[:, 0], seen.items()):
+        tm, vm = m.measured(case.path)
+        keep = (tm >= t0) & (tm <= t1)
+        a.plot(tm[keep], vm[keep], "k-", lw=0.6, alpha=0.7,
+               label=f"measured ({m.coeffs.file}, column {m.coeffs.fileColumn})")
+        if col in cols:
+            j = cols.index(col)
+            ks = (data[:, 0] >= t0) & (data[:, 0] <= t1)
+            a.plot(data[ks, 0], data[ks, j], "b-", lw=1, label="sphfoam")
+        a.set_ylabel(col, rotation=0, ha="right", fontsize=8)
+        a.grid(alpha=0.3)
+    ax[0, 0].legend(fontsize=7, loc="upper right")
+    ax[-1, 0].set_xlabel("t (s)")
+    fig.suptitle(f"{case.name}: {name} against the measurement")
+    fig.tight_layout()
+    return _save(fig, folder / f"{name}_measured.png")
+
+
 def plot_case(case_dir, names: list[str] | None = None, theory: str = "mcCowan",
               height: float | None = None, depth: float | None = None, log=print) -> list[Path]:
     """One PNG per function object of the case (or those ``names``) against its reference,
@@ -553,9 +602,19 @@ def plot_case(case_dir, names: list[str] | None = None, theory: str = "mcCowan",
     if not functions:
         raise CaseError.single("system/controlDict", "functions", "no function objects to plot")
     wave = _reference_wave(case, theory, height, depth)
+    measured = _measured_columns(case)
     out, missing, failed = [], [], []
     for name, fo in functions.items():
         kind = fo.name
+        if name in measured:                   # against the case's own measurement
+            png = plot_measured(case, name, measured[name])
+            if png is None:
+                missing.append(name)
+            else:
+                out.append(png)
+                log(f"{name}: {png.relative_to(case.path)}")
+            if kind not in ("pressureSensors", "forces", "probes"):
+                continue
         if kind == "waveGauges":
             if _series(case, name) is None:
                 missing.append(name)

@@ -80,6 +80,7 @@ MODEL_MODULES = (
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",
     "sphfoam.models.diffusion", "sphfoam.models.shifting", "sphfoam.sampling.beach",
     "sphfoam.study.beach_metrics", "sphfoam.sampling.loads", "sphfoam.sampling.slices",
+    "sphfoam.study.measured_metrics",
 )
 
 

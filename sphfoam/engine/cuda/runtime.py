@@ -44,11 +44,15 @@ class _DeviceExtra(dict):
 
 
 class _DeviceState:
-    """What an integrator's ``step`` reads of the state: ``n`` and ``extra`` (device
-    arrays; one element read is one scalar copied back)."""
+    """What an integrator's ``step`` reads of the state: ``n``, ``dim`` and ``extra``
+    (device arrays; one element read is one scalar copied back)."""
 
     def __init__(self, sim):
         self._sim = sim
+
+    @property
+    def dim(self) -> int:
+        return self._sim.state.dim
 
     @property
     def n(self) -> int:
