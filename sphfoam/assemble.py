@@ -66,7 +66,7 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
     walls = state.kind == WALL
     missing = [k for k in bnd.wall_fields if k not in state.extra] if walls.any() else []
     if case.models.motions:
-        missing += [k for k in ("patch", "x0", "y0", "z0")[:2 + state.dim]
+        missing += [k for k in ("patch", "x0", "y0", "z0")[:1 + state.dim]
                     if k not in state.extra]
     for family, mdl in case.models.sph.items():
         lacking = [k for k in getattr(mdl, "particle_fields", ()) if k not in state.extra]

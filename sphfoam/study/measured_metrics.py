@@ -31,6 +31,9 @@ class _MeasuredCoeffs(MetricCoeffs):
     file: str = Field(description="the measured series, relative to the case")
     fileColumn: int = Field(ge=1, description="its column (0 is the time)")
     window: tuple[float, float] = Field(description="(t0 t1): the times compared (s)")
+    missing: Literal["skip", "zero"] = Field("skip", description=(
+        "a NaN sample (e.g. a dry gauge, a sensor out of the water): `skip` it, or read it "
+        "as `zero` (a height gauge over a dry floor)"))
 
     @field_validator("window")
     @classmethod
@@ -75,11 +78,14 @@ class _Measured(Metric):
         cols, data, rel = self.series(case_path)
         j = self.column(cols, self.coeffs.column, rel)
         t0, t1 = self.coeffs.window
-        keep = (data[:, 0] >= t0) & (data[:, 0] <= t1) & np.isfinite(data[:, j])
+        v = data[:, j]
+        if self.coeffs.missing == "zero":
+            v = np.where(np.isfinite(v), v, 0.0)
+        keep = (data[:, 0] >= t0) & (data[:, 0] <= t1) & np.isfinite(v)
         if not keep.any():
             self.fail("window", f"{rel} has no finite {self.coeffs.column} in "
                       f"{t0:g} .. {t1:g} s")
-        return data[keep, 0], data[keep, j]
+        return data[keep, 0], v[keep]
 
 
 @register
