@@ -226,10 +226,53 @@ def test_dam_break_front_against_martin_moyce(tmp_path):
         evaluate_metrics(case, {"f": {"type": "damBreakFront", "times": [4]}})
 
 
+def test_measured_rms_and_peak_against_a_measured_series(tmp_path):
+    """measuredRMS and measuredPeak read a function object's column against a series file
+    of the case (a header line, time first): a simulated pulse 0.01 high and 0.02 s late
+    against the measured one gives the RMS of their difference and the peak's value and
+    time errors; a dry (NaN) sample reads as 0 with `missing zero`."""
+    case = tmp_path / "marin"
+    write_control(case, {"gauges": GAUGES})
+    t = np.round(np.arange(0.0, 10.0 + 1e-9, 0.01), 2)
+    sim = 0.16 * np.exp(-(t - 1.02) ** 2 / 0.01)
+    meas = 0.15 * np.exp(-(t - 1.0) ** 2 / 0.01)
+    fo = function_object(case, "gauges", GAUGES)
+    for k, row in enumerate(np.column_stack([t, sim, sim, np.where(t < 0.5, np.nan, sim)])):
+        fo.write_row(row)
+    fo.end()
+    tm = np.arange(0.0, 10.0, 0.001)
+    (case / "series.dat").write_text("Time (s) H (m)\n" + "\n".join(
+        f"{a:.6f} {0.15 * np.exp(-(a - 1.0) ** 2 / 0.01):.9f}" for a in tm))
+    base = {"function": "gauges", "file": "series.dat", "fileColumn": 1, "window": [0, 3]}
+    got = evaluate_metrics(case, {
+        "rms": {"type": "measuredRMS", "column": "eta(1)", **base},
+        "dry": {"type": "measuredRMS", "column": "eta(18)", "missing": "zero", **base},
+        "peak": {"type": "measuredPeak", "column": "eta(1)", **base},
+        "when": {"type": "measuredPeak", "column": "eta(1)", "quantity": "time", **base}})
+    keep = t <= 3
+    want = np.sqrt(np.mean((sim[keep] - np.interp(t[keep], tm, 0.15 * np.exp(
+        -(tm - 1.0) ** 2 / 0.01))) ** 2))
+    assert got["rms"].value == pytest.approx(want, rel=1e-6)
+    assert got["rms"].reference is None and got["rms"].error is None
+    assert got["dry"].value == pytest.approx(got["rms"].value, rel=1e-6)   # dry reads 0 ~ sim
+    assert got["peak"].value == pytest.approx(0.16) and got["peak"].reference == \
+        pytest.approx(0.15)
+    assert got["peak"].error == pytest.approx(100 * (0.16 / 0.15 - 1))
+    assert got["when"].value == pytest.approx(1.02) and got["when"].reference == \
+        pytest.approx(1.0)
+    with pytest.raises(CaseError, match=r"metrics\.bad\.fileColumn: series.dat has 2 columns"):
+        evaluate_metrics(case, {"bad": {"type": "measuredRMS", "column": "eta(1)",
+                                        **{**base, "fileColumn": 5}}})
+    with pytest.raises(CaseError, match=r"metrics\.short\.window: the run's eta\(1\) ends at"):
+        evaluate_metrics(case, {"short": {"type": "measuredRMS", "column": "eta(1)",
+                                          **{**base, "window": [0, 20]}}})
+
+
 def test_every_registered_metric_is_exercised_here():
     covered = {"waveHeight", "arrivalTime", "celerity", "peakElevation", "runUp",
                "channelMaxVelocity", "damBreakFront",
-               "breakingTime", "runUpPosition"}      # these two: tests/test_beach.py
+               "breakingTime", "runUpPosition",       # these two: tests/test_beach.py
+               "measuredRMS", "measuredPeak"}
     assert set(registry.names("metric")) == covered
     assert "metric" in registry.FAMILIES
 
