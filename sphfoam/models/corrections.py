@@ -26,12 +26,13 @@ def add_correction(u, du, kind, out):
         out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
 
 
-def corrected_velocity(owner, run, u, v, du, dv):
-    """(u + du, v + dv) of the fluid particles (walls: u, v) in two arrays ``owner`` keeps
-    between calls, so that no step allocates: valid until the owner's next call."""
-    buf = kept_arrays(owner, "_advection", 2, u.shape[0], u.dtype)
-    add_correction(u, du, run.state.kind, buf[0])
-    add_correction(v, dv, run.state.kind, buf[1])
+def corrected_velocity(owner, run, U, dU):
+    """U + dU of the fluid particles (walls: U), component by component (``U`` = (u, v) in
+    2-D, (u, v, w) in 3-D, ``dU`` the corrections alike), in arrays ``owner`` keeps between
+    calls, so that no step allocates: valid until the owner's next call."""
+    buf = kept_arrays(owner, "_advection", len(U), U[0].shape[0], U[0].dtype)
+    for u, du, out in zip(U, dU, buf):
+        add_correction(u, du, run.state.kind, out)
     return buf
 
 
@@ -128,11 +129,14 @@ U@c_ab = U@_ab + aux[I_xsph_dU@, a] - aux[I_xsph_dU@, b]
                      applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",),
                      parity="odd")]
 
-    def advection_velocity(self, run, u, v):
-        """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own)."""
-        du = run.aux("xsph_du")
-        dv = run.aux("xsph_dv")
-        return corrected_velocity(self, run, u, v, du, dv)
+    #: the advection hook is written for any dimension (the velocity's components)
+    hook_dims = (2, 3)
+
+    def advection_velocity(self, run, *U):
+        """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own);
+        ``U`` the velocity's components (u, v) or (u, v, w)."""
+        dU = [run.aux(f"xsph_d{c}") for c in "uvw"[:len(U)]]
+        return corrected_velocity(self, run, U, dU)
 
 
 @register
