@@ -110,3 +110,83 @@ def test_xsph_runs_steps_in_3d():
     assert abs(np.mean(st.w) - CASE.context.g[2] * sim.time) < 1e-12
     assert abs(np.mean(st.u)) < 1e-12 and abs(np.mean(st.v)) < 1e-12
     assert not np.array_equal(np.sort(st.z), np.sort(z0))
+
+
+# --- the 3-D velocity gradient: SPS stress and the shear switch ---------------------------
+#: a linear velocity field U = G x (every entry of G different from zero)
+G = np.array([[0.3, 1.1, -0.7], [0.4, -0.2, 0.9], [-1.3, 0.6, 0.5]])
+
+
+def _linear_block():
+    """A non-periodic cubic block 9 x 9 x 9 with U = G x; the particles more than a support
+    from its faces see a full, symmetric lattice support."""
+    x, y, z, hi = _lattice(9)
+    U = G @ np.vstack([x, y, z])
+    return x, y, z, hi, tuple(U[i].copy() for i in range(3))
+
+
+def _inner(sim, hi):
+    st = sim.state
+    reach = sim.pipeline.support_radius
+    return np.all([(a > reach) & (a < L - reach) for a, L in zip(st.positions, hi)], axis=0)
+
+
+def test_smagorinsky_sps_stress_of_a_linear_field_in_3d_is_the_exact_strain_rates():
+    """Interior particles of a cubic lattice with U = G x: the SPH gradient is c G with one
+    scalar c (the lattice's moment sum_b V_b x_ba dW/dx_a, near 1), so every one of the six
+    entries of tau/rho of T(3.58)-(3.60) in 3-D is c^2 times the exact tau(G): the six
+    ratios agree to 1e-9 (a missing or misplaced entry of S, |S| or the isotropic part
+    breaks them) and c = 0.979 (Wendland C2, h = 1.3 dx: the moment of the 3-D tank test in
+    tests/test_three_d_engine.py)."""
+    x, y, z, hi, U = _linear_block()
+    sim = _sim(x, y, z, hi, periodic=False, u=U, turbulence={"type": "smagorinskySPS"})
+    inner = _inner(sim, hi)
+    assert inner.sum() >= 8
+    S = 0.5 * (G + G.T)
+    s2 = 2.0 * (S * S).sum()
+    m = sim.pipeline.selection.turbulence
+    cs2 = (m.coeffs.Cs * DX) ** 2
+    blin = (2.0 / 3.0) * m.coeffs.CI * DX ** 2
+    nut = cs2 * np.sqrt(s2)
+    tau = 2 * nut * (S - np.trace(S) / 3 * np.eye(3)) - blin * s2 * np.eye(3)
+    ratios = []
+    for (i, j) in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)):
+        got = _aux(sim, f"turb_t{'xyz'[i]}{'xyz'[j]}")[inner]
+        ratios.append(got / tau[i, j])
+    ratios = np.array(ratios)
+    assert np.abs(ratios - ratios[0, 0]).max() < 1e-9
+    assert ratios[0, 0] == pytest.approx(0.979 ** 2, abs=0.005)
+
+
+@pytest.mark.parametrize("switch", ["colagrossiLandrini", "balsara"])
+def test_improved_artificial_switch_in_3d_is_that_of_the_exact_gradient(switch):
+    """k_a = |div v| / (|div v| + N + 1e-4 c_a / h), N = sqrt(S_ij S_ij) (T(3.35)-(3.36)) or
+    |curl v| (T(3.34)) over the nine entries: on interior particles of the linear field
+    (gradient c G, c from the SPS test's lattice moment) it equals the formula for c G to
+    1e-12; a pure rotation in the x-z plane (div 0) gives k = 0."""
+    x, y, z, hi, U = _linear_block()
+    sim = _sim(x, y, z, hi, periodic=False, u=U,
+               viscosity={"type": "improvedArtificial", "switch": switch})
+    inner = _inner(sim, hi)
+    # c: the lattice moment of the kernel gradient, from a pure dilation U = x
+    dil = _sim(x, y, z, hi, periodic=False, u=(x.copy(), 0 * x, 0 * x),
+               turbulence={"type": "smagorinskySPS", "Cs": 1.0, "CI": 0.0})
+    # S = diag(c, 0, 0), |S| = sqrt(2) c, Cs = 1: tau_xx = 2 nu_t (2/3) c = (4/3) sqrt(2) dx^2 c^2
+    txx = _aux(dil, "turb_txx")[_inner(dil, hi)]
+    c = np.sqrt(txx / ((4.0 / 3.0) * np.sqrt(2.0) * DX ** 2))
+    assert np.ptp(c) < 1e-12 and c[0] == pytest.approx(1.0, abs=0.03)
+    Gc = c[0] * G
+    div = abs(np.trace(Gc))
+    if switch == "balsara":
+        other = np.linalg.norm([Gc[2, 1] - Gc[1, 2], Gc[0, 2] - Gc[2, 0], Gc[1, 0] - Gc[0, 1]])
+    else:
+        S = 0.5 * (Gc + Gc.T)
+        other = np.sqrt((S * S).sum())
+    ca = sim.state.c[inner]
+    want = div / (div + other + 1e-4 * ca / sim.h)
+    got = _aux(sim, "visc_k")[inner]
+    assert np.abs(got - want).max() < 1e-12
+    assert 0.05 < want.min() < 0.95
+    rot = _sim(x, y, z, hi, periodic=False, u=(z - z.mean(), 0 * x, -(x - x.mean())),
+               viscosity={"type": "improvedArtificial", "switch": switch})
+    assert np.abs(_aux(rot, "visc_k")[_inner(rot, hi)]).max() < 1e-12
