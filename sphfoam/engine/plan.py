@@ -132,7 +132,7 @@ class Plan:
             for f in m.particle_fields:
                 if f not in self.fields:
                     self.fields.append(f)
-        T.check(self.terms, set(self.fields), self.kinds)
+        T.check(self.terms, set(self.fields), self.kinds, sel.dim)
         self.aux = []
         for t in self.terms:
             for w in t.writes:

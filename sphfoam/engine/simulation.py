@@ -46,8 +46,8 @@ def prescribe_patch_3d(x, y, z, u, v, w, patch, x0, y0, z0, which, ox, oy, oz, u
 
 def _refuse_two_dimensional_hooks(sel, motions) -> None:
     """In three dimensions: refuse, by name, a selected model whose run-time hooks are
-    written for two (mirror ghosts, Adami's wall velocity, the wall law, XSPH's and the
-    shiftings' advection) and a motion with no 3-D form."""
+    written for two (mirror ghosts, Adami's wall velocity, the wall law; a model's
+    ``hook_dims`` say which it has) and a motion with no 3-D form."""
     for m in sel.models():
         why = missing_dimension(m, 3)
         if why is not None:
@@ -333,18 +333,18 @@ class Simulation:
         else:
             pipe.prepass(*args)
 
-    def position_velocity(self, u, v):
-        """The velocity positions are advanced with: (u, v) itself, or what the selected
-        model that sets the advection velocity makes of it (e.g. XSPH, T(3.62))."""
+    def position_velocity(self, *U):
+        """The velocity positions are advanced with: ``U`` ((u, v), or (u, v, w) in 3-D)
+        itself, or what the selected models that set the advection velocity make of it (e.g.
+        XSPH, T(3.62)), each applied to the previous one's result."""
         for advection in self._advection:
-            u, v = advection(self.context, u, v)
-        return u, v
+            U = tuple(advection(self.context, *U))
+        return U
 
     def advect(self):
         """The velocity positions move with from the velocity now (``pU@`` of the
         integrators' updates)."""
-        st = self.state
-        self._pU = self.position_velocity(st.u, st.v) if self.dim == 2 else st.velocities
+        self._pU = self.position_velocity(*self.state.velocities)
 
     def run_update(self, name: str, scalars: dict):
         """The integrator's particle update ``name`` (``sphfoam.engine.stepping``)."""

@@ -158,8 +158,9 @@ class Term:
     #: component and side instead of one per term)
     force: str = ""
     #: the dimensions the term has code for: those every per-dimension code field
-    #: (``{2: "...", 3: "..."}``) names, (2, 3) where every code field is a plain string
-    #: (written once with ``@``, ``dot``, ``sum@``). A plan of another dimension refuses it
+    #: (``{2: "...", 3: "..."}``) and per-dimension name field (``writes={2: (...), 3:
+    #: (...)}``) names, (2, 3) where every such field is a plain string or tuple (written
+    #: once with ``@``, ``dot``, ``sum@``). A plan of another dimension refuses it
     dims: tuple[int, ...] = ()
     #: the model that contributed it (set by :func:`collect`)
     owner: object = field(default=None, compare=False)
@@ -173,6 +174,14 @@ class Term:
                 object.__setattr__(self, part, code)
             if isinstance(code, tuple):
                 dims &= {d for d, _ in code}
+        for part in NAME_PARTS:
+            names = getattr(self, part)
+            if isinstance(names, dict):
+                # names per dimension: one entry (dim, names) per dimension, which
+                # expand_names picks (e.g. the six entries of a 3 x 3 stress tensor)
+                names = tuple((d, tuple(v)) for d, v in sorted(names.items()))
+                object.__setattr__(self, part, names)
+                dims &= {d for d, _ in names}
         if not self.dims:
             object.__setattr__(self, "dims", tuple(sorted(dims)))
         if self.force:
@@ -205,6 +214,10 @@ class Term:
 
 #: the code fields of a :class:`Term`, each a string or a mapping {dimension: string}
 CODE_PARTS = ("pair", "init", "final", "reaction")
+#: the declared names of a :class:`Term`, each a tuple of names or a mapping {dimension:
+#: names} (a term whose fields differ per dimension: a 3 x 3 tensor's six entries, a 4 x 4
+#: moment matrix's ten)
+NAME_PARTS = ("reads", "writes", "corrects", "sums")
 
 
 class ContractError(ValueError):
@@ -305,11 +318,17 @@ def expand_components(code: str, dims=(("x", "u"), ("y", "v"))) -> str:
 AXES = (("x", "u"), ("y", "v"), ("z", "w"))
 
 
-def expand_names(names: tuple[str, ...], dim: int = 2) -> tuple[str, ...]:
+def expand_names(names: tuple, dim: int = 2) -> tuple[str, ...]:
     """Declared names (``reads``, ``writes``, ``corrects``, ``sums``) with each one holding
-    ``@`` written once per component: ``aux.name_dU@`` is ``aux.name_du``, ``aux.name_dv``."""
+    ``@`` written once per component: ``aux.name_dU@`` is ``aux.name_du``, ``aux.name_dv``;
+    an entry ``(dim, names)`` (names given per dimension, ``writes={2: (...), 3: (...)}``)
+    stands for its names in its own dimension and for nothing in another."""
     out = []
     for n in names:
+        if isinstance(n, tuple):
+            d, given = n
+            out += expand_names(given, dim) if d == dim else []
+            continue
         out += [n.replace("U@", v).replace("@", ax) for ax, v in AXES[:dim]] if "@" in n \
             else [n]
     return tuple(out)
@@ -336,8 +355,10 @@ def collect(models, dim: int = 2) -> list[Term]:
     return terms
 
 
-def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object]) -> None:
-    """Conflicts and missing inputs, naming the models involved."""
+def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object],
+          dim: int = 2) -> None:
+    """Conflicts and missing inputs, naming the models involved (``terms`` as
+    :func:`collect` wrote them out for ``dim`` dimensions)."""
     definers: dict[str, Term] = {}
     correctors: dict[str, Term] = {}
     aux_writers: dict[str, Term] = {}
@@ -377,9 +398,8 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object])
                                 "own to mirror")
         for name in t.sums:
             if "prepass" not in t.stages or \
-                    not all(re.search(rf"(?m)^{re.escape(name)} = 0\.0$",
-                                      expand_components(t.code("init", d), AXES[:d]))
-                            for d in t.dims):
+                    not re.search(rf"(?m)^{re.escape(name)} = 0\.0$",
+                                  expand_components(t.code("init", dim), AXES[:dim])):
                 raise ContractError(f"{t.who()} declares the sum {name!r}: only a prepass term "
                                     f"whose init sets it ('{name} = 0.0') may")
     pre = [t for t in terms if "prepass" in t.stages and not t.on_demand]

@@ -49,7 +49,8 @@ the walls; never the simulation itself:
 ``after_density_rate(run)``        after every density-only pass: may add to ``run.state.drho``
 ``walls_moved(run, offsets, velocities)``  prescribed wall motion at a stage time
 ``after_step(run)``                at the end of each step, before anything sees the state
-``advection_velocity(run, u, v)``  the velocity positions move with (e.g. XSPH); several are
+``advection_velocity(run, *U)``   the velocity positions move with (e.g. XSPH), from the
+                                   velocity's components U = (u, v) or (u, v, w); several are
                                    applied in selection order, each to the previous one's
                                    result (XSPH's v + dv, then a shifting's + delta_u)
 ``summary()``                      a line for the end of the run's log ("" for none)

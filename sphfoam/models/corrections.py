@@ -26,12 +26,13 @@ def add_correction(u, du, kind, out):
         out[a] = u[a] + du[a] if kind[a] == 0 else u[a]
 
 
-def corrected_velocity(owner, run, u, v, du, dv):
-    """(u + du, v + dv) of the fluid particles (walls: u, v) in two arrays ``owner`` keeps
-    between calls, so that no step allocates: valid until the owner's next call."""
-    buf = kept_arrays(owner, "_advection", 2, u.shape[0], u.dtype)
-    add_correction(u, du, run.state.kind, buf[0])
-    add_correction(v, dv, run.state.kind, buf[1])
+def corrected_velocity(owner, run, U, dU):
+    """U + dU of the fluid particles (walls: U), component by component (``U`` = (u, v) in
+    2-D, (u, v, w) in 3-D, ``dU`` the corrections alike), in arrays ``owner`` keeps between
+    calls, so that no step allocates: valid until the owner's next call."""
+    buf = kept_arrays(owner, "_advection", len(U), U[0].shape[0], U[0].dtype)
+    for u, du, out in zip(U, dU, buf):
+        add_correction(u, du, run.state.kind, out)
     return buf
 
 
@@ -128,11 +129,14 @@ U@c_ab = U@_ab + aux[I_xsph_dU@, a] - aux[I_xsph_dU@, b]
                      applies=("fluid", "wetWall"), reads=self._DV, corrects=("uc",),
                      parity="odd")]
 
-    def advection_velocity(self, run, u, v):
-        """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own)."""
-        du = run.aux("xsph_du")
-        dv = run.aux("xsph_dv")
-        return corrected_velocity(self, run, u, v, du, dv)
+    #: the advection hook is written for any dimension (the velocity's components)
+    hook_dims = (2, 3)
+
+    def advection_velocity(self, run, *U):
+        """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own);
+        ``U`` the velocity's components (u, v) or (u, v, w)."""
+        dU = [run.aux(f"xsph_d{c}") for c in "uvw"[:len(U)]]
+        return corrected_velocity(self, run, U, dU)
 
 
 @register
@@ -182,6 +186,10 @@ class CSPH(KernelCorrection):
     imaginary spectrum) and the tutorial runs, at the price of the exact linear consistency.
     The default is ``symmetric yes`` (a selection must not blow up by default); P's exact,
     linear-consistent form is ``symmetric no``.
+
+    In 3-D the same equations with P_ab = (1, x_ab, y_ab, z_ab): M is 4 x 4, inverted by
+    its cofactors, its ten entries stored as ``csph_b11`` ... ``csph_b44``, and the guard is
+    Hadamard's bound M11 M22 M33 M44.
 
     Neighbours: the sums run over the same neighbours b != a as the pair sums of the rates
     (grad W_aa = 0 for the standard kernel, so (24)-(25) have no self term).  Then
@@ -284,13 +292,83 @@ gWx *= 0.5
 gWy *= 0.5
 """
 
+    #: 3-D: P_ab = (1, x_ab, y_ab, z_ab), M 4 x 4 and B = M^-1 (its ten entries)
+    _B3 = tuple(f"aux.csph_b{i}{j}" for i in range(1, 5) for j in range(i, 5)) + \
+        ("aux.csph_ok",)
+
+    @staticmethod
+    def _code_3d(part: str, symmetric: bool = True) -> str:
+        """P(29)-(32) in three dimensions (the same equations with the basis (1, x, y, z)):
+        ``part`` init, pair, final (M and its inverse by cofactors) or grad (the corrected
+        gradient, of a alone or symmetrised)."""
+        from sphfoam.models.filters import _det3, _sym
+
+        idx = [(i, j) for i in range(1, 5) for j in range(i, 5)]
+        if part == "init":
+            return "".join(f"csph_m{i}{j} = 0.0\n" for i, j in idx)
+        if part == "pair":
+            out = ("csph_vw = mb / rhob * Wab\ncsph_p1 = 1.0\ncsph_p2 = dx_ab * inv_h\n"
+                   "csph_p3 = dy_ab * inv_h\ncsph_p4 = dz_ab * inv_h\n")
+            return out + "".join(f"csph_m{i}{j} += csph_vw * csph_p{i} * csph_p{j}\n"
+                                 for i, j in idx)
+        if part == "final":
+            m = _sym("csph_m")
+            out = []
+            for i, j in idx:
+                rows = [r for r in range(1, 5) if r != i]
+                cols = [c for c in range(1, 5) if c != j]
+                sign = "" if (i + j) % 2 == 0 else "-"
+                out.append(f"csph_k{i}{j} = {sign}({_det3(m, rows, cols)})")
+            out += ["csph_det = csph_m11 * csph_k11 + csph_m12 * csph_k12 + csph_m13 * csph_k13"
+                    " + csph_m14 * csph_k14",
+                    "csph_had = csph_m11 * csph_m22 * csph_m33 * csph_m44",
+                    "if csph_had > 0.0 and csph_det > kc_detmin * csph_had:",
+                    "    csph_inv = 1.0 / csph_det"]
+            for i, j in idx:
+                scale = " * inv_h" * ((i > 1) + (j > 1))
+                out.append(f"    aux[I_csph_b{i}{j}, a] = csph_k{i}{j} * csph_inv{scale}")
+            out += ["    aux[I_csph_ok, a] = 1.0", "else:"]
+            out += [f"    aux[I_csph_b{i}{j}, a] = 0.0" for i, j in idx]
+            out += ["    aux[I_csph_ok, a] = 0.0"]
+            return "\n".join(out) + "\n"
+
+        def b(i, j, who):
+            return f"aux[I_csph_b{min(i, j)}{max(i, j)}, {who}]"
+
+        def grad_a(k, who="a", sign=-1):
+            # -(B_1k + B_2k x_ab + B_3k y_ab + B_4k z_ab) W for a; for b (r_ba = -r_ab):
+            # +(B_1k - B_2k x_ab - B_3k y_ab - B_4k z_ab) W
+            if sign < 0:
+                return (f"-({b(1, k, who)} + {b(2, k, who)} * dx_ab + {b(3, k, who)} * dy_ab"
+                        f" + {b(4, k, who)} * dz_ab) * Wab")
+            return (f"({b(1, k, who)} - {b(2, k, who)} * dx_ab - {b(3, k, who)} * dy_ab"
+                    f" - {b(4, k, who)} * dz_ab) * Wab")
+
+        ax = {2: "x", 3: "y", 4: "z"}
+        if not symmetric:
+            return "if aux[I_csph_ok, a] != 0.0:\n" + "".join(
+                f"    gW{ax[k]} = {grad_a(k)}\n" for k in (2, 3, 4))
+        out = "".join(f"csph_p{ax[k]} = gW{ax[k]}\n" for k in (2, 3, 4))
+        out += "if aux[I_csph_ok, a] != 0.0:\n" + "".join(
+            f"    gW{ax[k]} = {grad_a(k)}\n" for k in (2, 3, 4))
+        out += "if aux[I_csph_ok, b] != 0.0:\n" + "".join(
+            f"    gW{ax[k]} += {grad_a(k, 'b', +1)}\n" for k in (2, 3, 4))
+        out += "else:\n" + "".join(f"    gW{ax[k]} += csph_p{ax[k]}\n" for k in (2, 3, 4))
+        return out + "".join(f"gW{ax[k]} *= 0.5\n" for k in (2, 3, 4))
+
     def terms(self):
-        grad = self._GRADIENT_SYMMETRIC if self.coeffs.symmetric else self._GRADIENT_A
-        return [Term("momentMatrix", ("prepass",), init=self._INIT, pair=self._PAIR,
-                     final=self._FINAL, applies=("all",), sees=("all",), reads=("W",),
-                     writes=self._B, dims=(2,)),
-                Term("correctedGradient", ("rates", "density"), pair=grad, applies=("all",),
-                     reads=("W", *self._B), corrects=("gradW",), dims=(2,))]
+        sym = self.coeffs.symmetric
+        grad = self._GRADIENT_SYMMETRIC if sym else self._GRADIENT_A
+        B = {2: self._B, 3: self._B3}
+        return [Term("momentMatrix", ("prepass",),
+                     init={2: self._INIT, 3: self._code_3d("init")},
+                     pair={2: self._PAIR, 3: self._code_3d("pair")},
+                     final={2: self._FINAL, 3: self._code_3d("final")}, applies=("all",),
+                     sees=("all",), reads=("W",), writes=B),
+                Term("correctedGradient", ("rates", "density"),
+                     pair={2: grad, 3: self._code_3d("grad", sym)}, applies=("all",),
+                     reads={d: ("W", *names) for d, names in B.items()},
+                     corrects=("gradW",))]
 
     def params(self, ctx: CaseContext):
         return {"kc_detmin": self.coeffs.minDetRatio}

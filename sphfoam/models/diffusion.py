@@ -92,8 +92,9 @@ class AntuonoDeltaSPH(DensityFilter):
     pre-pass (term ``renormalisedDensityGradient``) stores <grad rho>^L in ``aux`` for every
     particle; its sums run over every neighbour (as XSPH's, with which it shares the pre-pass
     loop; a dry wall particle enters with its own density), the diffusion's over fluid,
-    ghosts and wet walls. Guard: where det M / (M_xx M_yy) (Hadamard's ratio, 1 for a full symmetric
-    support) is below ``minDetRatio`` (an isolated or nearly isolated particle) the gradient is
+    ghosts and wet walls. In 3-D the same equations hold with M 3 x 3 (solved by its
+    adjugate) and the gradient's three components. Guard: where det M / (M_xx M_yy) (M_xx
+    M_yy M_zz in 3-D; Hadamard's ratio, 1 for a full symmetric support) is below ``minDetRatio`` (an isolated or nearly isolated particle) the gradient is
     set to zero, i.e. that particle's pairs fall back to the Molteni & Colagrossi term. No
     eta^2 guard on |r|^2 (it would spoil the exactness; the pair loop has r2 > 0 and the ratio
     (rho_b - rho_a) / |r| stays bounded for a smooth field).
@@ -102,7 +103,6 @@ class AntuonoDeltaSPH(DensityFilter):
     name = "antuonoDeltaSPH"
     doc = ("renormalised delta-SPH, Antuono et al. (2010): psi_ab = "
            "2(rho_b-rho_a) r_ba/r^2 - (<grad rho>^L_a + <grad rho>^L_b), exact for linear rho")
-    _G = ("aux.rgrad_x", "aux.rgrad_y")
 
     class Coeffs(_Delta):
         minDetRatio: float = Field(1e-3, gt=0.0, lt=1.0, description=(
@@ -147,16 +147,56 @@ filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / r2 \\
 drho_a += filt_dc0 * h * filt_psi * mb / rhob
 """
 
+    #: 3-D: M is 3 x 3 and g = M^-1 s by its adjugate (C_ji the cofactors), the Hadamard
+    #: ratio |det M| / |M_xx M_yy M_zz|; the same equations of Antuono et al. (2010) in d = 3
+    _INIT_3D = "".join(f"filt_m{i}{j} = 0.0\n" for i in "xyz" for j in "xyz") + \
+        "".join(f"filt_s{i} = 0.0\n" for i in "xyz")
+    _PAIR_3D = "filt_vb = mb / rhob\n" + "".join(
+        f"filt_m{i}{j} -= gW{i} * d{j}_ab * filt_vb\n" for i in "xyz" for j in "xyz") + \
+        "filt_drb = (rhob - rhoa) * filt_vb\n" + "".join(
+            f"filt_s{i} += filt_drb * gW{i}\n" for i in "xyz")
+
+    @staticmethod
+    def _final_3d() -> str:
+        ax = "xyz"
+
+        def m(i, j):
+            return f"filt_m{ax[i % 3]}{ax[j % 3]}"
+
+        lines = [f"filt_c{ax[i]}{ax[j]} = {m(i + 1, j + 1)} * {m(i + 2, j + 2)} - "
+                 f"{m(i + 1, j + 2)} * {m(i + 2, j + 1)}" for i in range(3) for j in range(3)]
+        lines.append("filt_det = filt_mxx * filt_cxx + filt_mxy * filt_cxy + filt_mxz * filt_cxz")
+        lines.append("filt_had = abs(filt_mxx * filt_myy * filt_mzz)")
+        lines.append("if filt_had > 0.0 and abs(filt_det) > filt_min_det * filt_had:")
+        for i in range(3):
+            lines.append(f"    aux[I_rgrad_{ax[i]}, a] = (" + " + ".join(
+                f"filt_c{ax[j]}{ax[i]} * filt_s{ax[j]}" for j in range(3)) + ") / filt_det")
+        lines.append("else:")
+        lines += [f"    aux[I_rgrad_{c}, a] = 0.0" for c in ax]
+        return "\n".join(lines) + "\n"
+
+    _DIFFUSION_3D = """\
+filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / r2 \\
+    - (aux[I_rgrad_x, a] + aux[I_rgrad_x, b]) * gWx \\
+    - (aux[I_rgrad_y, a] + aux[I_rgrad_y, b]) * gWy \\
+    - (aux[I_rgrad_z, a] + aux[I_rgrad_z, b]) * gWz
+drho_a += filt_dc0 * h * filt_psi * mb / rhob
+"""
+
     def params(self, ctx: CaseContext):
         return {"filt_dc0": _dc0(self.name, self.coeffs.delta, ctx),
                 "filt_min_det": self.coeffs.minDetRatio}
 
     def terms(self):
-        return [Term("renormalisedDensityGradient", ("prepass",), init=self._INIT,
-                     pair=self._PAIR, final=self._FINAL, applies=("all",), sees=("all",),
-                     reads=("gradW",), writes=self._G, dims=(2,)),
-                Term("densityDiffusion", ("rates", "density"), pair=self._DIFFUSION,
-                     reads=("gradW", *self._G), writes=("drho",), dims=(2,))]
+        g = ("aux.rgrad_@",)          # rgrad_x, rgrad_y (2-D), rgrad_z (3-D)
+        return [Term("renormalisedDensityGradient", ("prepass",),
+                     init={2: self._INIT, 3: self._INIT_3D},
+                     pair={2: self._PAIR, 3: self._PAIR_3D},
+                     final={2: self._FINAL, 3: self._final_3d()}, applies=("all",),
+                     sees=("all",), reads=("gradW",), writes=g),
+                Term("densityDiffusion", ("rates", "density"),
+                     pair={2: self._DIFFUSION, 3: self._DIFFUSION_3D},
+                     reads=("gradW", *g), writes=("drho",))]
 
 
 @register

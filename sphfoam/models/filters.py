@@ -88,7 +88,9 @@ class MLSReinitialisation(DensityFilter):
     V_b = m_b / rho_b. A linear density field is reproduced exactly wherever A is invertible,
     at a free surface or a wall too.
 
-    Moments are taken in units of h (x_ab / h), the 3 x 3 system is solved in closed form
+    In 3-D the basis is (1, x_ab, y_ab, z_ab) and A 4 x 4, the same T(3.64)-(3.68) in d = 3
+    (the guard det A / (A00 A11 A22 A33)). Moments are taken in units of h (x_ab / h), the
+    3 x 3 (4 x 4) system is solved in closed form
     (only the first column of A^-1 is needed: the cofactors of A's first row over det A) and
     the sums m_b W_ab (1, x_ab, y_ab) are accumulated in the same neighbour loop, so one pass
     suffices. Guard: det A / (A00 A11 A22) lies in [0, 1] (Hadamard's inequality; 1 for a
@@ -114,8 +116,6 @@ class MLSReinitialisation(DensityFilter):
     def params(self, ctx: CaseContext):
         return {"filt_min_det": self.coeffs.minDetRatio}
 
-    #: the moment matrix of the linear basis (1, x, y): 2-D
-    filter_dims = (2,)
     filter_init = _SELF + (
         "filt_va = m[a] / rhoa * filt_w0\n"
         "filt_a00 = filt_va\n"          # the self term: x_aa = y_aa = 0
@@ -153,6 +153,62 @@ class MLSReinitialisation(DensityFilter):
         "                + filt_cof2 * filt_m2) / filt_det\n"
         "    if filt_mls > 0.0:\n"
         "        rho_new = filt_mls\n")
+
+    def terms(self):
+        """The 2-D pass above and its 3-D form (the basis (1, x, y, z), A 4 x 4)."""
+        return [Term("densityFilter", ("filter",),
+                     init={2: self.filter_init, 3: _mls_3d("init")},
+                     pair={2: self.filter_pair, 3: _mls_3d("pair")},
+                     final={2: self.filter_final, 3: _mls_3d("final")}, sees=("all",),
+                     reads=("W",), writes=("rho_new",))]
+
+
+def _det3(e, rows, cols) -> str:
+    """The determinant of the 3 x 3 submatrix (rows, cols) of the matrix whose entry
+    (i, j) is the expression ``e(i, j)``, by the rule of Sarrus."""
+    (r0, r1, r2), (c0, c1, c2) = rows, cols
+    return (f"{e(r0, c0)} * ({e(r1, c1)} * {e(r2, c2)} - {e(r1, c2)} * {e(r2, c1)})"
+            f" - {e(r0, c1)} * ({e(r1, c0)} * {e(r2, c2)} - {e(r1, c2)} * {e(r2, c0)})"
+            f" + {e(r0, c2)} * ({e(r1, c0)} * {e(r2, c1)} - {e(r1, c1)} * {e(r2, c0)})")
+
+
+def _sym(prefix: str):
+    """The entry (i, j) of a symmetric matrix stored as its upper triangle ``prefix{i}{j}``."""
+    return lambda i, j: f"{prefix}{min(i, j)}{max(i, j)}"
+
+
+def _mls_3d(part: str) -> str:
+    """T(3.64)-(3.68) in three dimensions: the basis (1, x, y, z)/h, A 4 x 4 (its upper
+    triangle ``filt_a{i}{j}``); beta = A^-1 e_0 is the first column of A^-1, the cofactors of
+    A's first row over det A; the same Hadamard guard det A / (A00 A11 A22 A33) and Shepard
+    fallback as in 2-D."""
+    if part == "init":
+        return _SELF + "filt_va = m[a] / rhoa * filt_w0\nfilt_a00 = filt_va\n" + "".join(
+            f"filt_a{i}{j} = 0.0\n" for i in range(4) for j in range(i, 4) if (i, j) != (0, 0)) \
+            + "filt_m0 = m[a] * filt_w0\nfilt_m1 = 0.0\nfilt_m2 = 0.0\nfilt_m3 = 0.0\n"
+    if part == "pair":
+        p = ("filt_p1 = dx_ab * inv_h\nfilt_p2 = dy_ab * inv_h\nfilt_p3 = dz_ab * inv_h\n"
+             "filt_wv = Wab * mb / rhob\nfilt_a00 += filt_wv\n")
+        p += "".join(f"filt_a0{j} += filt_wv * filt_p{j}\n" for j in range(1, 4))
+        p += "".join(f"filt_a{i}{j} += filt_wv * filt_p{i} * filt_p{j}\n"
+                     for i in range(1, 4) for j in range(i, 4))
+        p += "filt_mw = mb * Wab\nfilt_m0 += filt_mw\n"
+        return p + "".join(f"filt_m{j} += filt_mw * filt_p{j}\n" for j in range(1, 4))
+    a = _sym("filt_a")
+    out = ["# first column of A^-1 = cofactors of the first row / det A (A is symmetric)"]
+    for j in range(4):
+        cols = [c for c in range(4) if c != j]
+        sign = "" if j % 2 == 0 else "-"
+        out.append(f"filt_cof{j} = {sign}({_det3(a, (1, 2, 3), cols)})")
+    out += ["filt_det = filt_a00 * filt_cof0 + filt_a01 * filt_cof1 + filt_a02 * filt_cof2"
+            " + filt_a03 * filt_cof3",
+            "rho_new = filt_m0 / filt_a00",
+            "if filt_det > filt_min_det * filt_a00 * filt_a11 * filt_a22 * filt_a33:",
+            "    filt_mls = (filt_cof0 * filt_m0 + filt_cof1 * filt_m1 + filt_cof2 * filt_m2",
+            "                + filt_cof3 * filt_m3) / filt_det",
+            "    if filt_mls > 0.0:",
+            "        rho_new = filt_mls"]
+    return "\n".join(out) + "\n"
 
 
 @register

@@ -304,11 +304,11 @@ else:
         c = self.coeffs
         return c.surfaceR is not None and c.surfaceR != c.R
 
-    def advection_velocity(self, run, u, v):
-        """Positions move with (u, v) + delta_u of the last pre-pass (walls: unchanged)."""
-        du = run.aux("shift_du")
-        dv = run.aux("shift_dv")
-        return corrected_velocity(self, run, u, v, du, dv)
+    def advection_velocity(self, run, *U):
+        """Positions move with U + delta_u of the last pre-pass (walls: unchanged); ``U`` the
+        velocity's components (u, v) or (u, v, w)."""
+        dU = [run.aux(f"shift_d{c}") for c in "uvw"[:len(U)]]
+        return corrected_velocity(self, run, U, dU)
 
     # the corrections' hooks exist only where they are selected (a model the case does not
     # select costs nothing: no call per evaluation)

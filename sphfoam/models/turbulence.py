@@ -54,7 +54,10 @@ class SmagorinskySPS(Turbulence):
     nu_t = (Cs dx)^2 |S| of T(3.60); and the SPS stress of T(3.58) divided by rho,
     tau_ij/rho = 2 nu_t (S_ij - S_kk delta_ij / 3) - (2/3) CI dx^2 |S|^2 delta_ij, stored in
     ``turb_txx``, ``turb_txy``, ``turb_tyy`` (m^2/s^2). The filter width is the initial particle
-    spacing dx. The 1/3 and 2/3 are the thesis' (three-dimensional) factors, kept in 2-D.
+    spacing dx. The 1/3 and 2/3 are the thesis' (three-dimensional) factors, kept in 2-D. In
+    3-D the same equations over the nine entries of the velocity gradient: the six entries
+    ``turb_txx``, ``turb_txy``, ``turb_txz``, ``turb_tyy``, ``turb_tyz``, ``turb_tzz`` (the wall
+    law is 2-D only: with ``wallLaw`` the model is refused in 3-D).
 
     In the rates loop the divergence enters the momentum equation in the standard symmetric SPH
     form (1/rho grad . tau)_a = sum_b m_b (tau_a/rho_a^2 + tau_b/rho_b^2) . grad_a W_ab, which
@@ -94,6 +97,22 @@ aux[I_turb_txx, a] = 2.0 * sps_nut * sps_dudx + sps_iso
 aux[I_turb_txy, a] = 2.0 * sps_nut * sps_sxy
 aux[I_turb_tyy, a] = 2.0 * sps_nut * sps_dvdy + sps_iso"""
 
+    #: T(3.58)-(3.60) in three dimensions: the six entries of the symmetric tau/rho
+    _STRESS_3D = """\
+sps_sxy = 0.5 * (sps_dudy + sps_dvdx)                                  # T(3.59)
+sps_sxz = 0.5 * (sps_dudz + sps_dwdx)
+sps_syz = 0.5 * (sps_dvdz + sps_dwdy)
+sps_s2 = 2.0 * (sps_dudx * sps_dudx + sps_dvdy * sps_dvdy + sps_dwdz * sps_dwdz
+                + 2.0 * (sps_sxy * sps_sxy + sps_sxz * sps_sxz + sps_syz * sps_syz))  # |S|^2
+sps_nut = turb_cs2 * math.sqrt(sps_s2)                                 # T(3.60)
+sps_iso = -(2.0 / 3.0) * sps_nut * (sps_dudx + sps_dvdy + sps_dwdz) - turb_blin * sps_s2
+aux[I_turb_txx, a] = 2.0 * sps_nut * sps_dudx + sps_iso
+aux[I_turb_txy, a] = 2.0 * sps_nut * sps_sxy
+aux[I_turb_txz, a] = 2.0 * sps_nut * sps_sxz
+aux[I_turb_tyy, a] = 2.0 * sps_nut * sps_dvdy + sps_iso
+aux[I_turb_tyz, a] = 2.0 * sps_nut * sps_syz
+aux[I_turb_tzz, a] = 2.0 * sps_nut * sps_dwdz + sps_iso"""
+
     # tau/rho^2 of a = aux/rho_a, loaded once per particle
     _INIT = """\
 sps_xx_a = aux[I_turb_txx, a] / rhoa
@@ -105,6 +124,24 @@ sps_xy = sps_xy_a + aux[I_turb_txy, b] / rhob
 sps_yy = sps_yy_a + aux[I_turb_tyy, b] / rhob
 acc_x += mb * (sps_xx * gWx + sps_xy * gWy)
 acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
+
+    _INIT_3D = """\
+sps_xx_a = aux[I_turb_txx, a] / rhoa
+sps_xy_a = aux[I_turb_txy, a] / rhoa
+sps_xz_a = aux[I_turb_txz, a] / rhoa
+sps_yy_a = aux[I_turb_tyy, a] / rhoa
+sps_yz_a = aux[I_turb_tyz, a] / rhoa
+sps_zz_a = aux[I_turb_tzz, a] / rhoa"""
+    _PAIR_3D = """\
+sps_xx = sps_xx_a + aux[I_turb_txx, b] / rhob
+sps_xy = sps_xy_a + aux[I_turb_txy, b] / rhob
+sps_xz = sps_xz_a + aux[I_turb_txz, b] / rhob
+sps_yy = sps_yy_a + aux[I_turb_tyy, b] / rhob
+sps_yz = sps_yz_a + aux[I_turb_tyz, b] / rhob
+sps_zz = sps_zz_a + aux[I_turb_tzz, b] / rhob
+acc_x += mb * (sps_xx * gWx + sps_xy * gWy + sps_xz * gWz)
+acc_y += mb * (sps_xy * gWx + sps_yy * gWy + sps_yz * gWz)
+acc_z += mb * (sps_xz * gWx + sps_yz * gWy + sps_zz * gWz)"""
 
     #: with a wall law, a wall neighbour's stress is the wall shear stress, taken for both
     #: particles of the pair, so that a plane wall exerts exactly tau_w on the fluid
@@ -120,7 +157,9 @@ else:
 acc_x += mb * (sps_xx * gWx + sps_xy * gWy)
 acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
 
-    _TAU = ("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy")
+    _TAU = {2: ("aux.turb_txx", "aux.turb_txy", "aux.turb_tyy"),
+            3: ("aux.turb_txx", "aux.turb_txy", "aux.turb_txz", "aux.turb_tyy",
+                "aux.turb_tyz", "aux.turb_tzz")}
 
     @property
     def wall_law(self) -> str:
@@ -133,10 +172,16 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
         return ("nx", "ny", "wallDist") if self.wall_law != "none" else ()
 
     def terms(self):
-        pair = self._PAIR if self.wall_law == "none" else self._PAIR_WALL_LAW
-        out = [velocity_gradient_term("sps", self._STRESS, self._TAU),
-               Term("spsStress", ("rates",), init=self._INIT, pair=pair, reads=("gradW", *self._TAU), writes=("acc",),
-                    dims=(2,))]
+        # 3-D: the general-dimension T(3.58)-(3.61); the wall law (its term) is 2-D only
+        if self.wall_law == "none":
+            init, pair = {2: self._INIT, 3: self._INIT_3D}, {2: self._PAIR, 3: self._PAIR_3D}
+            stress = {2: self._STRESS, 3: self._STRESS_3D}
+        else:
+            init, pair, stress = {2: self._INIT}, {2: self._PAIR_WALL_LAW}, {2: self._STRESS}
+        out = [velocity_gradient_term("sps", stress, self._TAU),
+               Term("spsStress", ("rates",), init=init, pair=pair,
+                    reads={d: ("gradW", *tau) for d, tau in self._TAU.items()},
+                    writes=("acc",))]
         if self.wall_law != "none":
             out.append(wl.wall_law_term(self.wall_law))
         return out

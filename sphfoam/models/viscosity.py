@@ -116,12 +116,28 @@ _GRADIENT_PAIR = """\
 """
 
 
-def velocity_gradient_term(p: str, final: str, writes: tuple[str, ...]) -> Term:
+def _gradient_3d(p: str) -> tuple[str, str]:
+    """(init, pair) of the 3-D velocity gradient: the nine entries ``{p}_dudx`` ...
+    ``{p}_dwdz`` (the same sum, T(3.37)/(3.61), in d = 3)."""
+    init = "".join(f"{p}_d{c}d{x} = 0.0\n" for c in "uvw" for x in "xyz")
+    pair = f"{p}_vb = mb / rhob\n" + "".join(
+        f"{p}_d{c}d{x} -= {p}_vb * {c}_ab * gW{x}\n" for c in "uvw" for x in "xyz")
+    return init, pair
+
+
+def velocity_gradient_term(p: str, final, writes) -> Term:
     """The pre-pass of T(3.37)/(3.61): the SPH velocity gradient of every particle (walls
-    included, over every neighbour) into ``{p}_dudx`` ... ``{p}_dvdy``, then ``final``."""
-    return Term("velocityGradient", ("prepass",), init=_GRADIENT_INIT.format(p=p),
-                pair=_GRADIENT_PAIR.format(p=p), final=final, applies=("all",),
-                sees=("all",), reads=("gradW",), writes=writes, dims=(2,))
+    included, over every neighbour) into ``{p}_dudx`` ... ``{p}_dvdy`` (2-D) or ``{p}_dudx``
+    ... ``{p}_dwdz`` (3-D), then ``final`` (a string, or {dimension: string} where what
+    follows from the gradient is per dimension; a 2-D string alone: the term is 2-D)."""
+    if not isinstance(final, dict):
+        final = {2: final}
+    init3, pair3 = _gradient_3d(p)
+    init = {2: _GRADIENT_INIT.format(p=p), 3: init3}
+    pair = {2: _GRADIENT_PAIR.format(p=p), 3: pair3}
+    return Term("velocityGradient", ("prepass",), init={d: init[d] for d in final},
+                pair={d: pair[d] for d in final}, final=final, applies=("all",),
+                sees=("all",), reads=("gradW",), writes=writes)
 
 
 @register
@@ -134,7 +150,9 @@ class ImprovedArtificial(Viscosity):
     the sign of T(3.14)/(3.61), dv^i/dx^j = sum_b m_b/rho_b (v_b^i - v_a^i) dW_ab/dx_a^j,
     evaluated in the pre-pass for every particle (walls included); k_a is stored in ``visc_k``.
     Pure shear (div v = 0) gives k = 0; an isotropic compression gives k = 2/(2 + sqrt 2)
-    ~ 0.59 with the strain-rate switch and k ~ 1 with Balsara's.
+    ~ 0.59 with the strain-rate switch and k ~ 1 with Balsara's. In 3-D: the nine entries of
+    the gradient, div v their trace, S_ij S_ij over the 3 x 3 strain rate and |curl v| the
+    norm of the vorticity vector (T(3.34)-(3.37) in d = 3).
     """
 
     name = "improvedArtificial"
@@ -154,17 +172,32 @@ class ImprovedArtificial(Viscosity):
         return [velocity_gradient_term("ivd", self.switch_code(), ("aux.visc_k",)),
                 *super().terms()]
 
-    def switch_code(self) -> str:
-        """k_a of T(3.34) or T(3.35)-(3.36) from the velocity gradient, into aux visc_k."""
+    def switch_code(self) -> dict[int, str]:
+        """k_a of T(3.34) or T(3.35)-(3.36) from the velocity gradient, into aux visc_k, per
+        dimension: in 3-D div v = du/dx + dv/dy + dw/dz, |curl v| the norm of the whole
+        vorticity vector and S_ij S_ij the sum over the nine entries (the general-dimension
+        forms of T(3.34)-(3.36))."""
+        tail = ("ivd_den = ivd_div + ivd_other + 1e-4 * ca * inv_h\n"
+                "aux[I_visc_k, a] = ivd_div / ivd_den if ivd_den > 0.0 else 0.0")
         if self.coeffs.switch == "balsara":
             other = "ivd_other = abs(ivd_dvdx - ivd_dudy)                  # |curl v|, T(3.34)\n"
+            other3 = ("ivd_cx = ivd_dwdy - ivd_dvdz\n"
+                      "ivd_cy = ivd_dudz - ivd_dwdx\n"
+                      "ivd_cz = ivd_dvdx - ivd_dudy\n"
+                      "ivd_other = math.sqrt(ivd_cx * ivd_cx + ivd_cy * ivd_cy"
+                      " + ivd_cz * ivd_cz)   # |curl v|, T(3.34)\n")
         else:
             other = ("ivd_sxy = 0.5 * (ivd_dudy + ivd_dvdx)\n"
                      "ivd_other = math.sqrt(ivd_dudx * ivd_dudx + ivd_dvdy * ivd_dvdy"
                      " + 2.0 * ivd_sxy * ivd_sxy)   # sqrt(S_ij S_ij), T(3.35)-(3.36)\n")
-        return ("ivd_div = abs(ivd_dudx + ivd_dvdy)\n" + other
-                + "ivd_den = ivd_div + ivd_other + 1e-4 * ca * inv_h\n"
-                  "aux[I_visc_k, a] = ivd_div / ivd_den if ivd_den > 0.0 else 0.0")
+            other3 = ("ivd_sxy = 0.5 * (ivd_dudy + ivd_dvdx)\n"
+                      "ivd_sxz = 0.5 * (ivd_dudz + ivd_dwdx)\n"
+                      "ivd_syz = 0.5 * (ivd_dvdz + ivd_dwdy)\n"
+                      "ivd_other = math.sqrt(ivd_dudx * ivd_dudx + ivd_dvdy * ivd_dvdy"
+                      " + ivd_dwdz * ivd_dwdz + 2.0 * (ivd_sxy * ivd_sxy + ivd_sxz * ivd_sxz"
+                      " + ivd_syz * ivd_syz))   # sqrt(S_ij S_ij), T(3.35)-(3.36)\n")
+        return {2: "ivd_div = abs(ivd_dudx + ivd_dvdy)\n" + other + tail,
+                3: "ivd_div = abs(ivd_dudx + ivd_dvdy + ivd_dwdz)\n" + other3 + tail}
 
     def params(self, ctx):
         return {"visc_alpha": self.coeffs.alpha}
