@@ -262,5 +262,27 @@ def check_geometry(case) -> None:
     kernel = case.models.sph["kernel"]
     problems = geometry_problems(case.particles, FILES["particleDict"][0], kernel.support,
                                  kernel.coeffs.hdx)
+    problems += periodic_problems(case)
     if problems:
         raise CaseError(problems)
+
+
+def periodic_problems(case) -> list[Problem]:
+    """A periodic axis shorter than three neighbour cells (the cell walk would list a
+    neighbour twice through the seam)."""
+    from sphfoam.case.case import FILES
+
+    pd = case.particles
+    if pd.domain is None or not pd.domain.periodic:
+        return []
+    cell = case.schemes.neighbourSearch.cellSizeFactor * case.context.support
+    out = []
+    for axis in pd.domain.periodic:
+        k = "xyz".index(axis)
+        length = pd.domain.max[k] - pd.domain.min[k]
+        if length < 3 * cell:
+            out.append(Problem(FILES["particleDict"][0], "domain.periodic", (
+                f"the periodic length in {axis}, {length:g} m, is less than three neighbour "
+                f"cells ({3 * cell:.4g} m = 3 x cellSizeFactor x the kernel support): make the "
+                f"domain at least that long in {axis}")))
+    return out
