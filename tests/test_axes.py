@@ -100,8 +100,8 @@ def test_every_model_expands_in_2d_and_3d_or_is_refused(model):
 
 
 def test_a_model_without_a_3d_form_is_refused_by_name():
-    sel = dataclasses.replace(selection(particleShifting={"type": "lindShifting"}), dim=3)
-    with pytest.raises(T.ContractError, match="particleShifting .lindShifting. has no 3-D form"):
+    sel = dataclasses.replace(selection(turbulence={"type": "mixingLength"}), dim=3)
+    with pytest.raises(T.ContractError, match="turbulence .mixingLength. has no 3-D form"):
         sel.plan()
     dataclasses.replace(sel, dim=2).plan()
 

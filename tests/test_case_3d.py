@@ -90,9 +90,9 @@ def test_a_3d_tank_run_stays_hydrostatic_and_writes_3d_time_directories(tmp_path
 def test_a_3d_case_refuses_what_has_no_3d_form_by_name(tmp_path):
     case = _copy(tmp_path)
     sph = case / "constant" / "sphProperties"
-    sph.write_text(sph.read_text() + "\nparticleShifting { type lindShifting; }\n")
-    with pytest.raises(CaseError, match=r"particleShifting.type: particleShifting "
-                                        r"'lindShifting' has no 3-D form"):
+    sph.write_text(sph.read_text() + "\nturbulence { type mixingLength; }\n")
+    with pytest.raises(CaseError, match=r"turbulence.type: turbulence "
+                                        r"'mixingLength' has no 3-D form"):
         Case(case).validate()
     case = _copy(tmp_path, "b")
     _edit(case / "constant" / "g", r"\(0 0 -9.81\)", "(0 -9.81)")

@@ -35,6 +35,19 @@ Both models share
   itself, the tip of a thin sheet) is not shifted at all; 0 (the default) leaves it to the
   tangential rule.
 
+In 3-D (z up) the same equations in three dimensions, as the papers give them for any
+dimension: M_a is 3 x 3 and lambda_a the smallest eigenvalue of its symmetric part, by the
+closed form of the roots of a symmetric 3 x 3 matrix's characteristic cubic (Smith 1961,
+CACM 4), with Marrone et al.'s same bounds (their criterion is stated for 2-D and 3-D);
+n_a = -M_a^-1 nu_a / |...| with M_a^-1 = adj(M_a) / det M_a and the guard |det M_a| >
+1e-3 |M_xx M_yy M_zz|; grad C, the anti-clumping term and the surface rule are written
+once for the components (the tangential part is delta_u - (delta_u . n) n in 3-D as in 2-D),
+a wall particle stands for dx^3, Lind's |v_a| has three components, and grad u_a of
+``correctVelocity`` nine entries. Checked (tests/test_models_3d.py) on cubic lattices: no
+shift of a uniform periodic one, a disordered one made more uniform, the faces of a block
+found as its surface with outward normals (corners along the diagonal), the shift tangential
+there.
+
 The shift moves positions only: the momentum and continuity equations use v, so linear momentum
 is unaffected (the Lagrangian re-meshing is an error of the order of the shift itself). With
 ``correctVelocity yes`` a fluid particle's velocity follows the flow to where the shift takes it:
@@ -111,6 +124,11 @@ class ParticleShifting(PipelineModel):
     _SURF = ("aux.shift_lambda", "aux.shift_n@")
     _DU = ("aux.shift_dU@",)
     _COEF: str
+    #: the magnitude in 3-D (where it reads the speed: three components)
+    _COEF_3D: str = ""
+    #: the run-time hooks (the advection velocity, the corrections' rates) take 2 or 3
+    #: components
+    hook_dims = (2, 3)
 
     _DETECT_INIT = """\
 shift_mxx = 0.0
@@ -137,6 +155,67 @@ shift_det = shift_mxx * shift_myy - shift_mxy * shift_myx
 if abs(shift_det) > 1e-3 * abs(shift_mxx * shift_myy) and abs(shift_det) > 0.0:
     shift_nx = -(shift_myy * shift_gx - shift_mxy * shift_gy) / shift_det
     shift_ny = -(shift_mxx * shift_gy - shift_myx * shift_gx) / shift_det
+else:
+    shift_n@ = -shift_g@
+shift_nn = math.sqrt(dot(shift_n@, shift_n@))
+if shift_nn > 0.0:
+    aux[I_shift_n@, a] = shift_n@ / shift_nn
+else:
+    aux[I_shift_n@, a] = 0.0
+"""
+    #: 3-D: M is 3 x 3 (nine entries); lambda_a the smallest eigenvalue of its symmetric
+    #: part by the closed form for a symmetric 3 x 3 matrix (Smith 1961: the roots of the
+    #: characteristic cubic as q + 2 p cos(phi + 2 pi k / 3)); n_a = -M^-1 nu / |...| with
+    #: M^-1 = adj(M) / det M, the same guard as in 2-D (|det M| against |M_xx M_yy M_zz|)
+    _DETECT_INIT_3D = """\
+shift_mx@ = 0.0
+shift_my@ = 0.0
+shift_mz@ = 0.0
+shift_g@ = 0.0
+"""
+    _DETECT_PAIR_3D = """\
+shift_vb = mb / rhob
+shift_mx@ -= gWx * d@_ab * shift_vb
+shift_my@ -= gWy * d@_ab * shift_vb
+shift_mz@ -= gWz * d@_ab * shift_vb
+shift_g@ += gW@ * shift_vb
+"""
+    _DETECT_FINAL_3D = """\
+shift_sxy = 0.5 * (shift_mxy + shift_myx)
+shift_sxz = 0.5 * (shift_mxz + shift_mzx)
+shift_syz = 0.5 * (shift_myz + shift_mzy)
+shift_q = (shift_mxx + shift_myy + shift_mzz) / 3.0
+shift_p1 = shift_sxy * shift_sxy + shift_sxz * shift_sxz + shift_syz * shift_syz
+shift_bxx = shift_mxx - shift_q
+shift_byy = shift_myy - shift_q
+shift_bzz = shift_mzz - shift_q
+shift_p2 = shift_bxx * shift_bxx + shift_byy * shift_byy + shift_bzz * shift_bzz + 2.0 * shift_p1
+if shift_p2 > 0.0:
+    shift_p = math.sqrt(shift_p2 / 6.0)
+    shift_cr = 0.5 * (shift_bxx * (shift_byy * shift_bzz - shift_syz * shift_syz)
+                     - shift_sxy * (shift_sxy * shift_bzz - shift_syz * shift_sxz)
+                     + shift_sxz * (shift_sxy * shift_syz - shift_byy * shift_sxz)) / (
+                         shift_p * shift_p * shift_p)
+    shift_cr = min(1.0, max(-1.0, shift_cr))
+    shift_phi = math.acos(shift_cr) / 3.0
+    aux[I_shift_lambda, a] = shift_q + 2.0 * shift_p * math.cos(shift_phi
+                                                                  + 2.0943951023931957)
+else:
+    aux[I_shift_lambda, a] = shift_q
+shift_axx = shift_myy * shift_mzz - shift_myz * shift_mzy
+shift_axy = shift_mxz * shift_mzy - shift_mxy * shift_mzz
+shift_axz = shift_mxy * shift_myz - shift_mxz * shift_myy
+shift_ayx = shift_myz * shift_mzx - shift_myx * shift_mzz
+shift_ayy = shift_mxx * shift_mzz - shift_mxz * shift_mzx
+shift_ayz = shift_mxz * shift_myx - shift_mxx * shift_myz
+shift_azx = shift_myx * shift_mzy - shift_myy * shift_mzx
+shift_azy = shift_mxy * shift_mzx - shift_mxx * shift_mzy
+shift_azz = shift_mxx * shift_myy - shift_mxy * shift_myx
+shift_det = shift_mxx * shift_axx + shift_mxy * shift_ayx + shift_mxz * shift_azx
+if abs(shift_det) > 1e-3 * abs(shift_mxx * shift_myy * shift_mzz) and abs(shift_det) > 0.0:
+    shift_nx = -(shift_axx * shift_gx + shift_axy * shift_gy + shift_axz * shift_gz) / shift_det
+    shift_ny = -(shift_ayx * shift_gx + shift_ayy * shift_gy + shift_ayz * shift_gz) / shift_det
+    shift_nz = -(shift_azx * shift_gx + shift_azy * shift_gy + shift_azz * shift_gz) / shift_det
 else:
     shift_n@ = -shift_g@
 shift_nn = math.sqrt(dot(shift_n@, shift_n@))
@@ -207,6 +286,18 @@ if kindb == FLUID:
     shift_gvx -= v_ab * gWx * shift_vb
     shift_gvy -= v_ab * gWy * shift_vb
 """
+    #: 3-D: the nine entries of grad u (shift_gu@ = d u / d@, shift_gv@, shift_gw@)
+    _GRADU_INIT_3D = """\
+shift_gu@ = 0.0
+shift_gv@ = 0.0
+shift_gw@ = 0.0
+"""
+    _GRADU_PAIR_3D = """\
+if kindb == FLUID:
+    shift_gu@ -= u_ab * gW@ * shift_vb
+    shift_gv@ -= v_ab * gW@ * shift_vb
+    shift_gw@ -= w_ab * gW@ * shift_vb
+"""
     #: with correctDensity: grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid b
     #: (b's sum from the pair (b, a) has the same sign: ``_mirrored``)
     _GRADRHO_INIT = """\
@@ -231,6 +322,16 @@ else:
     aux[I_shift_ax, a] = 0.0
     aux[I_shift_ay, a] = 0.0
 """
+    _GRADU_FINAL_3D = """\
+if kind[a] == FLUID:
+    aux[I_shift_ax, a] = dot(aux[I_shift_dU@, a], shift_gu@)
+    aux[I_shift_ay, a] = dot(aux[I_shift_dU@, a], shift_gv@)
+    aux[I_shift_az, a] = dot(aux[I_shift_dU@, a], shift_gw@)
+else:
+    aux[I_shift_ax, a] = 0.0
+    aux[I_shift_ay, a] = 0.0
+    aux[I_shift_az, a] = 0.0
+"""
     _SHIFT_FINAL = """\
 shift_near = shift_ns > 0.0 or aux[I_shift_lambda, a] < shift_lam
 {split}if kind[a] == FLUID:
@@ -254,15 +355,21 @@ else:
         return {"shift_r": c.R, "shift_rs": c.R if c.surfaceR is None else c.surfaceR,
                 "shift_n": c.n, "shift_lam": c.surfaceLambda,
                 "shift_lamf": c.freeSurfaceLambda,
-                "shift_qdx": ctx.dx / ctx.h, "shift_vw": ctx.dx * ctx.dx,
+                # a wall particle's volume: dx^2 in 2-D, dx^3 in 3-D
+                "shift_qdx": ctx.dx / ctx.h,
+                "shift_vw": ctx.dx * ctx.dx * (ctx.dx if ctx.dim == 3 else 1.0),
                 **self.magnitude(ctx)}
 
     def magnitude(self, ctx: CaseContext) -> dict[str, float]:
         return {}
 
-    def terms(self):
+    def _shift_code(self, dim: int):
+        """The shifting vector's (init, pair, reaction, final, writes, sums) in ``dim``
+        dimensions: the 2-D text as before; in 3-D the same lines (written with ``@``) but
+        the magnitude (|v| of three components) and grad u (nine entries)."""
         split = self._split
-        final = (self._SHIFT_FINAL.replace("{coef}", "    " + self._COEF)
+        coef = self._COEF if dim == 2 else self._COEF_3D
+        final = (self._SHIFT_FINAL.replace("{coef}", "    " + coef)
                  .replace("{split}", self._SPLIT_FINAL if split else ""))
         # an integer exponent n (4, the default) written as a literal: numba then multiplies
         # (about 2 ns per pair) instead of calling pow (about 20 ns)
@@ -276,10 +383,13 @@ else:
             init += self._SPLIT_INIT
             reaction = self._SPLIT_REACTION
             sums += _sum_names(self._SPLIT_INIT)
+        gradu = ((self._GRADU_INIT, self._GRADU_PAIR, self._GRADU_FINAL,
+                  ("aux.shift_ax", "aux.shift_ay")) if dim == 2 else
+                 (self._GRADU_INIT_3D, self._GRADU_PAIR_3D, self._GRADU_FINAL_3D,
+                  ("aux.shift_ax", "aux.shift_ay", "aux.shift_az")))
         # the corrections' gradients: sums of their own in the same pre-pass
         for on, g_init, g_pair, g_final, g_writes in (
-                (self.coeffs.correctVelocity, self._GRADU_INIT, self._GRADU_PAIR,
-                 self._GRADU_FINAL, ("aux.shift_ax", "aux.shift_ay")),
+                (self.coeffs.correctVelocity, *gradu),
                 (self.coeffs.correctDensity, self._GRADRHO_INIT, self._GRADRHO_PAIR,
                  self._GRADRHO_FINAL, ("aux.shift_drho",))):
             if on:
@@ -289,13 +399,21 @@ else:
                 final += g_final
                 writes += g_writes
                 sums += _sum_names(g_init)
-        return [Term("freeSurfaceDetection", ("step",), init=self._DETECT_INIT,
-                     pair=self._DETECT_PAIR, final=self._DETECT_FINAL, applies=("fluid",),
-                     reads=("gradW",), writes=self._SURF, dims=(2,)),
+        return init, pair, reaction, final, writes, sums
+
+    def terms(self):
+        code = {d: self._shift_code(d) for d in (2, 3)}
+        init, pair, reaction, final, writes, sums = (
+            {d: code[d][i] for d in (2, 3)} for i in range(6))
+        return [Term("freeSurfaceDetection", ("step",),
+                     init={2: self._DETECT_INIT, 3: self._DETECT_INIT_3D},
+                     pair={2: self._DETECT_PAIR, 3: self._DETECT_PAIR_3D},
+                     final={2: self._DETECT_FINAL, 3: self._DETECT_FINAL_3D},
+                     applies=("fluid",), reads=("gradW",), writes=self._SURF),
                 Term("shiftingVector", ("prepass",), init=init,
                      pair=pair, final=final, applies=("all",), sees=("all",),
                      reads=("W", "gradW", *self._SURF), writes=writes,
-                     reaction=reaction, sums=sums, dims=(2,),
+                     reaction=reaction, sums=sums,
                      nonfluid_discarded=True)]                   # walls are not shifted
 
     @property
@@ -327,8 +445,8 @@ else:
         evaluation (zero for walls)."""
         st = run.state
         if self.coeffs.correctVelocity:
-            add_rate(st.ax, run.aux("shift_ax"))
-            add_rate(st.ay, run.aux("shift_ay"))
+            for acc, c in zip(st.accelerations, "xyz"):
+                add_rate(acc, run.aux(f"shift_a{c}"))
         if self.coeffs.correctDensity:
             add_rate(st.drho, run.aux("shift_drho"))
 
@@ -356,6 +474,7 @@ class LindShifting(ParticleShifting):
                          "D = A h |v| dt (Lind et al. 2012: 1 to 6)")
 
     _COEF = "shift_k = shift_ah * math.sqrt(ua * ua + va * va)"
+    _COEF_3D = "shift_k = shift_ah * math.sqrt(ua * ua + va * va + wa * wa)"
 
     def magnitude(self, ctx):
         return {"shift_ah": self.coeffs.A * ctx.h}
@@ -380,6 +499,7 @@ class DeltaPlusShifting(ParticleShifting):
                           "for c0 = 10 U_max)")
 
     _COEF = "shift_k = shift_c"
+    _COEF_3D = _COEF
 
     def magnitude(self, ctx):
         if not ctx.c0 > 0.0:
