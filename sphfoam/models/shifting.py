@@ -55,6 +55,7 @@ the volume omega_a moving with v0 = u + delta_u,
 
     d(omega_a rho_a)/dt = -omega_a div(rho (u - v0))_a = omega_a div(rho delta_u)_a,
 
+(Vila's mass equation; the papers' equation numbers were not at hand when this was written)
 is written with the centred flux of their SPH-ALE form (no Riemann solver):
 
     dm_a/dt = V_a sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab   (fluid a, b),
