@@ -73,6 +73,11 @@ CASES: dict[str, tuple[str, dict]] = {
     "db_dplus": (DB, {f"{SPH}:densityFilter": {"type": "fourtakasDeltaSPH"},
                       f"{SPH}:particleShifting": {"type": "deltaPlusShifting"}}),
     "db_lind": (DB, {f"{SPH}:particleShifting": {"type": "lindShifting"}}),
+    # issue 35: the shift carrying mass and density (the ALE mass flux)
+    "db_dplus_mass": (DB, {f"{SPH}:densityFilter": {"type": "fourtakasDeltaSPH"},
+                           f"{SPH}:particleShifting": {"type": "deltaPlusShifting",
+                                                      "correctDensity": True,
+                                                      "correctMass": True}}),
     "db_hybrid_xsph_mls": (DB, {f"{SPH}:boundary": {"type": "hybrid"},
                                 f"{SPH}:velocityCorrection": {"type": "xsph"},
                                 f"{SPH}:densityFilter": {"type": "mlsReinitialisation",

@@ -169,6 +169,28 @@ def test_peak_elevation_and_run_up(tmp_path):
     assert vals["Rm"].value == pytest.approx(6.5, rel=1e-12) and vals["Rm"].unit == "m"
 
 
+def test_mean_crest_over_a_stretch(tmp_path):
+    """meanCrest: the mean of the crest samples between xFrom and xTo that are at least
+    minHeight high (a ripple ahead of the wave is left out), against the reference."""
+    case = tmp_path / "flume"
+    write_control(case, {"crest": CREST})
+    t = np.round(np.arange(0.0, 8.0, 0.05), 2)
+    x = 0.5 + 2.5 * t
+    eta = np.where(t < 1.0, 0.001, 0.15 + 0.01 * np.sin(t))      # a ripple first
+    write_crest(case, np.column_stack([t, x, eta]))
+    sel = (x >= 2) & (x <= 18) & (eta >= 0.05)
+    want = eta[sel].mean()
+    assert abs(want - eta[(x >= 2) & (x <= 18)].mean()) > 1e-3    # the ripple matters
+    vals = evaluate_metrics(case, {"m": {"type": "meanCrest", "xFrom": 2, "xTo": 18,
+                                         "minHeight": 0.05, "reference": 0.15}})
+    assert vals["m"].value == pytest.approx(want, rel=1e-8)      # crest.dat to 10 digits
+    assert vals["m"].error == pytest.approx(100 * (vals["m"].value - 0.15) / 0.15, rel=1e-12)
+    with pytest.raises(CaseError, match="no crest sample"):
+        evaluate_metrics(case, {"m": {"type": "meanCrest", "xFrom": 30, "xTo": 40}})
+    with pytest.raises(CaseError, match="xTo"):
+        evaluate_metrics(case, {"m": {"type": "meanCrest", "xFrom": 18, "xTo": 2}})
+
+
 def channel_profile(case: Path, times=(2.0, 120.0), factor=0.98):
     """velocityProfile output of rows at (k + 1/2) dx moving at factor x T(3.42)."""
     fo = function_object(case, "profile", PROFILE, dx=L / 40, g=(F, 0.0))
@@ -269,7 +291,7 @@ def test_measured_rms_and_peak_against_a_measured_series(tmp_path):
 
 
 def test_every_registered_metric_is_exercised_here():
-    covered = {"waveHeight", "arrivalTime", "celerity", "peakElevation", "runUp",
+    covered = {"waveHeight", "arrivalTime", "celerity", "peakElevation", "runUp", "meanCrest",
                "channelMaxVelocity", "damBreakFront",
                "breakingTime", "runUpPosition",       # these two: tests/test_beach.py
                "measuredRMS", "measuredPeak"}

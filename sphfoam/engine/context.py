@@ -51,6 +51,11 @@ class RunContext:
         return self._sim.step_index
 
     @property
+    def last_dt(self) -> float:
+        """The time step last taken (in ``after_step``: the step just taken)."""
+        return self._sim.last_dt
+
+    @property
     def h(self) -> float:
         """The smoothing length."""
         return self._sim.h

@@ -57,12 +57,40 @@ which is the convective term of the ALE equations of Sun, Colagrossi, Marrone, A
 grad_a W_ab over the fluid neighbours (walls' velocities are not the fluid's), summed in the same
 pre-pass as grad C. ``correctDensity yes`` adds their density term, drho_a/dt += delta_u_a .
 grad rho_a, the same way (in the rates and after the density-only pass).
+
+With ``correctMass yes`` (and ``correctDensity yes``, which it needs) the shift also carries
+mass between fluid particles, so that each particle's volume V_a = m_a / rho_a follows the
+room its shifted position gives it: positions moving with u + delta_u make the arbitrary
+Lagrangian-Eulerian (ALE) scheme of Vila (1999, Math. Models Methods Appl. Sci. 9) with the
+shifting velocity as the transport velocity's departure from the flow, as Oger, Marrone, Le
+Touze & de Leffe (2016, Comput. Phys. Commun. 200) combine them. Its conservation of mass for
+the volume omega_a moving with v0 = u + delta_u,
+
+    d(omega_a rho_a)/dt = -omega_a div(rho (u - v0))_a = omega_a div(rho delta_u)_a,
+
+(Vila's mass equation; the papers' equation numbers were not at hand when this was written)
+is written with the centred flux of their SPH-ALE form (no Riemann solver):
+
+    dm_a/dt = V_a sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab   (fluid a, b),
+
+antisymmetric in (a, b), so the fluid's mass is conserved to round-off. With the density's
+own ALE term (``correctDensity``: drho_a/dt = -rho_a div u_a + delta_u_a . grad rho_a) the
+volume then obeys dV_a/dt = V_a div(u + delta_u)_a: it grows where the shift spreads the
+particles and shrinks where it packs them, as their spacing does, and the density stays the
+flow's. Without it the shift moves the particles but not their volumes, and the two drift
+apart (the flume's bulk at 0.994 of its volume by sum_b V_b W_ab, docs/low-dissipation.md).
+The flux is summed in the rates pass (after the pre-pass that makes delta_u), and the mass of
+the last evaluation's flux is added once per step, m_a += dt dm_a/dt, after the step
+(``after_step``). It reads delta_u of the neighbours, so the rates pass gathers over full
+lists where this is selected.
 """
 
 from __future__ import annotations
 
-from pydantic import Field
+from numba import njit, prange
+from pydantic import Field, model_validator
 
+from sphfoam.engine.fastmath import FASTMATH
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.models.corrections import add_rate, corrected_velocity
@@ -98,6 +126,28 @@ class _ShiftCoeffs(Coeffs):
         "rho_a (the same Taylor correction for the density; without it a particle shifted "
         "down a hydrostatic column is too light for its new depth by rho0 g dz / c0^2); "
         "grad rho_a = sum_b V_b (rho_b - rho_a) grad_a W_ab over fluid neighbours"))
+    correctMass: bool = Field(False, description=(
+        "carry mass with the shift, so that each particle's volume m/rho follows its shifted "
+        "position: dm_a/dt = V_a sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a "
+        "W_ab over fluid neighbours, the ALE mass flux of Vila (1999) / Oger et al. (2016) "
+        "with the shift as the transport velocity's departure from the flow; conserves the "
+        "fluid's mass to round-off. Needs correctDensity yes (the density's own ALE term)"))
+
+    @model_validator(mode="after")
+    def _mass_needs_density(self):
+        if self.correctMass and not self.correctDensity:
+            raise ValueError("correctMass needs correctDensity yes: the mass flux keeps the "
+                             "volumes m/rho consistent with the shifted positions only "
+                             "beside the density's ALE term delta_u . grad rho")
+        return self
+
+
+@njit(parallel=True, cache=True, fastmath=set(FASTMATH))
+def add_mass(m, mdot, kind, dt):
+    """m_a += dt dm_a/dt for the fluid particles (kind 0); walls keep theirs."""
+    for a in prange(m.shape[0]):
+        if kind[a] == 0:
+            m[a] += dt * mdot[a]
 
 
 def _sum_names(init: str) -> tuple[str, ...]:
@@ -347,6 +397,22 @@ else:
     aux[I_shift_dU@, a] = 0.0
 """
 
+    #: with correctMass: the ALE mass flux, Vila (1999) / Oger et al. (2016), centred:
+    #: dm_a/dt = V_a sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab over fluid b,
+    #: in the rates pass, which follows the pre-pass that made delta_u of every particle
+    _MASS_INIT = """\
+shift_fa@ = rhoa * aux[I_shift_dU@, a]
+shift_mf = 0.0
+"""
+    _MASS_PAIR = """\
+if kindb == FLUID:
+    shift_f@ = shift_fa@ + rhob * aux[I_shift_dU@, b]
+    shift_mf += mb / rhob * dot(shift_f@, gW@)
+"""
+    _MASS_FINAL = """\
+aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
+"""
+
     def imports(self):
         return ["import math"]
 
@@ -405,7 +471,7 @@ else:
         code = {d: self._shift_code(d) for d in (2, 3)}
         init, pair, reaction, final, writes, sums = (
             {d: code[d][i] for d in (2, 3)} for i in range(6))
-        return [Term("freeSurfaceDetection", ("step",),
+        terms = [Term("freeSurfaceDetection", ("step",),
                      init={2: self._DETECT_INIT, 3: self._DETECT_INIT_3D},
                      pair={2: self._DETECT_PAIR, 3: self._DETECT_PAIR_3D},
                      final={2: self._DETECT_FINAL, 3: self._DETECT_FINAL_3D},
@@ -415,6 +481,12 @@ else:
                      reads=("W", "gradW", *self._SURF), writes=writes,
                      reaction=reaction, sums=sums,
                      nonfluid_discarded=True)]                   # walls are not shifted
+        if self.coeffs.correctMass:          # the ALE mass flux: checked in 2-D only
+            terms.append(Term("shiftMassFlux", ("rates",), init=self._MASS_INIT,
+                              pair=self._MASS_PAIR, final=self._MASS_FINAL,
+                              reads=("gradW", *self._DU), writes=("aux.shift_mdot",),
+                              dims=(2,)))
+        return terms
 
     @property
     def _split(self) -> bool:
@@ -438,6 +510,15 @@ else:
     @property
     def after_density_rate(self):
         return self._add_density_rate if self.coeffs.correctDensity else None
+
+    @property
+    def after_step(self):
+        return self._carry_mass if self.coeffs.correctMass else None
+
+    def _carry_mass(self, run):
+        """With ``correctMass``: m_a += dt dm_a/dt, the mass flux of the step's last rates
+        evaluation over the step just taken (zero for walls)."""
+        add_mass(run.state.m, run.aux("shift_mdot"), run.state.kind, run.last_dt)
 
     def _add_rates(self, run):
         """With ``correctVelocity``: du_a/dt += (delta_u_a . grad) u_a; with
