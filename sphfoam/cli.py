@@ -380,8 +380,7 @@ def render(case: Path = typer.Argument(Path("."), help="case directory"),
                "(default: y through the middle)"),
            slab: Optional[float] = typer.Option(
                None, "--slab", help="3-D: the slice's thickness (m; default dx)")):
-    """PNG frames of the particles coloured by a field, and a GIF or MP4 of the run (3-D: a
-    3-D view and a slice)."""
+    """PNG frames of the particles coloured by a field (3-D: a view and a slice), and a GIF."""
     from sphfoam.render import render_case
 
     c = _case(case)

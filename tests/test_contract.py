@@ -142,7 +142,7 @@ def assert_declarations_match(model):
 
 # --- the engine and the runner name no model --------------------------------------------------
 #: registered names that are also ordinary words of the engine's own vocabulary
-_GENERIC = {"lines", "none"}
+_GENERIC = {"lines", "none", "forces", "slices"}   # also plain words of the engine's text
 #: attributes that belong to one family or model (read through hooks, never by the engine)
 _FAMILY_ATTRS = ("coeffs.noSlip", ".noSlip ", "no_slip", ".every", "wall_density_evolves", "advects_positions", ".ghosts",
                  "aux[0]", "aux[1]", "filter_pair", "gradient_code", "eos.B", "coeffs.gamma",

@@ -73,6 +73,9 @@ class PistonPaddle(Motion):
                 registry.build("waveMaker", v)
             except registry.UnknownModel as e:
                 raise ValueError(str(e)) from None
+            except ArithmeticError as e:     # e.g. a depth so large its cube overflows
+                raise ValueError(f"the wave maker's coefficients give no stroke ({e})") \
+                    from None
             return v
 
     def __init__(self, coeffs=None):

@@ -176,7 +176,10 @@ def _problems_3d(pd: ParticleDict, file: str, support: float, hdx: float,
     n = 0.0
     for name, r in pd.fluid.items():
         lo, hi = bounds(r)
-        n += float(np.prod(hi - lo)) / dx ** 3
+        try:
+            n += float(np.prod(hi - lo)) / dx ** 3
+        except (ZeroDivisionError, OverflowError):
+            n = math.inf
         if float(min(hi - lo)) < dx * (1 - 1e-9):
             problems.append(Problem(file, f"fluid.{name}", f"is {float(min(hi - lo)):g} m "
                                     f"across, less than dx = {dx:g} m: it holds no particle"))
@@ -198,14 +201,17 @@ def _problems_3d(pd: ParticleDict, file: str, support: float, hdx: float,
                                         "would be removed at the first step"))
     if problems:
         return problems
-    for w in pd.walls.values():
-        lo, hi = bounds(w)
-        e = hi - lo
-        n += 2.0 * (e[0] * e[1] + e[1] * e[2] + e[0] * e[2]) * w.layers / dx ** 2
-    lo, hi = default_domain(pd)
-    cell = support * hdx * dx
-    cells = float(np.prod([max(b - a, cell) / cell + 1 for a, b in zip(lo, hi)]))
-    need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
+    try:
+        for w in pd.walls.values():
+            lo, hi = bounds(w)
+            e = hi - lo
+            n += 2.0 * (e[0] * e[1] + e[1] * e[2] + e[0] * e[2]) * w.layers / dx ** 2
+        lo, hi = default_domain(pd)
+        cell = support * hdx * dx
+        cells = float(np.prod([max(b - a, cell) / cell + 1 for a, b in zip(lo, hi)]))
+        need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
+    except (ZeroDivisionError, OverflowError):
+        n = cells = need = math.inf
     memory = machine_memory() if memory is None else memory
     if not math.isfinite(need) or (memory is not None and need > MEMORY_FRACTION * memory):
         have = f"this machine has {_size(memory)}" if memory else "more than is available"
