@@ -142,8 +142,7 @@ else:
     # psi_ab . grad_a W_ab with r_ba = -r_ab: 2 (rho_a - rho_b) r_ab.gradW / r^2 - (G_a+G_b).gradW
     _DIFFUSION = """\
 filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / r2 \\
-    - (aux[I_rgrad_x, a] + aux[I_rgrad_x, b]) * gWx \\
-    - (aux[I_rgrad_y, a] + aux[I_rgrad_y, b]) * gWy
+    - dot(aux[I_rgrad_@, a] + aux[I_rgrad_@, b], gW@)
 drho_a += filt_dc0 * h * filt_psi * mb / rhob
 """
 
@@ -175,14 +174,6 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
         lines += [f"    aux[I_rgrad_{c}, a] = 0.0" for c in ax]
         return "\n".join(lines) + "\n"
 
-    _DIFFUSION_3D = """\
-filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / r2 \\
-    - (aux[I_rgrad_x, a] + aux[I_rgrad_x, b]) * gWx \\
-    - (aux[I_rgrad_y, a] + aux[I_rgrad_y, b]) * gWy \\
-    - (aux[I_rgrad_z, a] + aux[I_rgrad_z, b]) * gWz
-drho_a += filt_dc0 * h * filt_psi * mb / rhob
-"""
-
     def params(self, ctx: CaseContext):
         return {"filt_dc0": _dc0(self.name, self.coeffs.delta, ctx),
                 "filt_min_det": self.coeffs.minDetRatio}
@@ -195,7 +186,7 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
                      final={2: self._FINAL, 3: self._final_3d()}, applies=("all",),
                      sees=("all",), reads=("gradW",), writes=g),
                 Term("densityDiffusion", ("rates", "density"),
-                     pair={2: self._DIFFUSION, 3: self._DIFFUSION_3D},
+                     pair=self._DIFFUSION,
                      reads=("gradW", *g), writes=("drho",))]
 
 
