@@ -147,14 +147,20 @@ def geometry_problems(pd: ParticleDict, file: str = "system/particleDict", suppo
         need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
     except (ZeroDivisionError, OverflowError):
         n = cells = need = math.inf
+    return problems + _budget(file, dx, n, cells, need, memory)
+
+
+def _budget(file: str, dx: float, n: float, cells: float, need: float,
+            memory: int | None) -> list[Problem]:
+    """The memory budget: ``need`` bytes for ``n`` particles and ``cells`` grid cells
+    against MEMORY_FRACTION of the machine's memory (both dimensions)."""
     memory = machine_memory() if memory is None else memory
-    if not math.isfinite(need) or (memory is not None and need > MEMORY_FRACTION * memory):
-        have = f"this machine has {_size(memory)}" if memory else "more than is available"
-        problems.append(Problem(file, "dx", f"dx = {dx:g} m gives about {n:.3g} particles and "
-                                f"{cells:.3g} neighbour-grid cells, needing about "
-                                f"{_size(need)} of memory; {have}. Use a larger dx (or a "
-                                "smaller domain)"))
-    return problems
+    if math.isfinite(need) and (memory is None or need <= MEMORY_FRACTION * memory):
+        return []
+    have = f"this machine has {_size(memory)}" if memory else "more than is available"
+    return [Problem(file, "dx", f"dx = {dx:g} m gives about {n:.3g} particles and "
+                    f"{cells:.3g} neighbour-grid cells, needing about {_size(need)} of "
+                    f"memory; {have}. Use a larger dx (or a smaller domain)")]
 
 
 _FACE_WORDS = {"left": (0, 0, "x <"), "right": (0, 1, "x >"), "front": (1, 0, "y <"),
@@ -212,14 +218,7 @@ def _problems_3d(pd: ParticleDict, file: str, support: float, hdx: float,
         need = n * BYTES_PER_PARTICLE + cells * BYTES_PER_CELL
     except (ZeroDivisionError, OverflowError):
         n = cells = need = math.inf
-    memory = machine_memory() if memory is None else memory
-    if not math.isfinite(need) or (memory is not None and need > MEMORY_FRACTION * memory):
-        have = f"this machine has {_size(memory)}" if memory else "more than is available"
-        problems.append(Problem(file, "dx", f"dx = {dx:g} m gives about {n:.3g} particles and "
-                                f"{cells:.3g} neighbour-grid cells, needing about "
-                                f"{_size(need)} of memory; {have}. Use a larger dx (or a "
-                                "smaller domain)"))
-    return problems
+    return problems + _budget(file, dx, n, cells, need, memory)
 
 
 def _inside(region, x, y):
