@@ -52,7 +52,7 @@ class _DeviceState:
 
     @property
     def dim(self) -> int:
-        return self._sim.state.dim
+        return self._sim.dim
 
     @property
     def n(self) -> int:
@@ -73,6 +73,10 @@ class _DeviceStepContext(StepContext):
 
 class CudaSimulation:
     """The particle state stepped by the CUDA kernels of a selection."""
+
+    #: the reductions' starting values (the list check's maxima; the time step's min, max)
+    _RED_CHECK = np.zeros(3)
+    _RED_DT = np.array([math.inf, 0.0, 0.0])
 
     def __init__(self, state: ParticleState, pipeline, integrator, *, domain_lo, domain_hi,
                  beta: float, force_condition: bool, adjust_time_step: bool, delta_t: float,
@@ -120,6 +124,7 @@ class CudaSimulation:
         #: seconds per stage when ``timers`` is set (synchronised: for benchmarks only)
         self.timers = None
         self._host = state
+        self.dim = state.dim
         self._upload(state)
         self.prm = pipeline.prm
         self.d_prm = self.cuda.to_device(pipeline.prm)
@@ -169,9 +174,30 @@ class CudaSimulation:
                                                   dtype=self.dtype))
 
     def _get(self, a):
-        out = a.copy_to_host()
+        """``a`` copied back (counted; timed as ``copies`` when the timers are on)."""
+        if self.timers is None:
+            out = a.copy_to_host()
+        else:
+            self.cuda.synchronize()
+            t0 = _time.perf_counter()
+            out = a.copy_to_host()
+            self.timers["copies"] = self.timers.get("copies", 0.0) + \
+                _time.perf_counter() - t0
         self.bytes_d2h += out.nbytes
         return out
+
+    def _put(self, dev, host):
+        """The host array ``host`` into the device array ``dev`` (counted and timed as
+        ``_get``)."""
+        if self.timers is None:
+            dev.copy_to_device(host)
+        else:
+            self.cuda.synchronize()
+            t0 = _time.perf_counter()
+            dev.copy_to_device(host)
+            self.timers["copies"] = self.timers.get("copies", 0.0) + \
+                _time.perf_counter() - t0
+        self.bytes_h2d += host.nbytes
 
     @property
     def state(self) -> ParticleState:
@@ -233,7 +259,7 @@ class CudaSimulation:
         if ref is None or ref[0].shape[0] != self.n:
             return False
         cl = self.cells
-        self._red.copy_to_device(np.zeros(3))
+        self._put(self._red, self._RED_CHECK)
         d = self.d
         self._launch(self.D.displacement_reduce, self.n, d["x"], d["y"], ref[0], ref[1],
                      d["u"], d["v"], cl.x0, cl.y0, cl.x0 + cl.ncx * cl.cell_size,
@@ -266,8 +292,7 @@ class CudaSimulation:
         order = cu.device_array(n, dtype=np.int64)
         self._launch(D.scatter, n, cell, start, fill, order)
         self._launch(D.order_cells, ncells + 1, start, order)
-        kept = int(start[ncells])            # particles inside the box (one scalar)
-        self.bytes_d2h += 8
+        kept = int(self._get(start[ncells:ncells + 1])[0])   # particles inside the box
         for k in list(d):
             if k in _SCRATCH:
                 continue
@@ -293,8 +318,7 @@ class CudaSimulation:
         self._launch(self.module.count_neighbours, n, *grid, count)
         nb_start = cu.device_array(n + 1, dtype=np.int64)
         self._scan_scratch = D.exclusive_scan(count, nb_start, self._scan_scratch)
-        total = int(nb_start[n])
-        self.bytes_d2h += 8
+        total = int(self._get(nb_start[n:n + 1])[0])
         idx = self._nb[1]
         if idx is None or idx.shape[0] < total:
             idx = cu.device_array(int(total * 1.1) + 16, dtype=np.uint32)
@@ -398,7 +422,7 @@ class CudaSimulation:
         if not self.adjust_time_step:
             return self.delta_t
         d = self.d
-        self._red.copy_to_device(np.array([math.inf, 0.0, 0.0]))
+        self._put(self._red, self._RED_DT)
         self._timed("time_step", self._launch, self.D.time_step_reduce, self.n, self.h,
                     d["c"], d["sigma"], d["ax"], d["ay"], d["kind"], self._red)
         dmin, fmax, _ = self._get(self._red)
