@@ -208,7 +208,10 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         pw = np.zeros(0, dtype=np.int64)
     if xw.size and xf.size:
         # fluid never overlaps walls: drop fluid particles closer than dx/2 to a wall particle
-        d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]))
+        # only whether a wall particle is nearer than dx/2: a bounded search (inf beyond)
+        d, _ = cKDTree(np.column_stack([xw, yw])).query(np.column_stack([xf, yf]),
+                                                         distance_upper_bound=0.5 * dx,
+                                                         workers=-1)
         ok = d >= 0.5 * dx * (1 - LATTICE_TOLERANCE)
         xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
     for r in walls:                       # nor inside a solid block (beyond its rows)
@@ -248,7 +251,8 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
                                                     gmag, ctx.rho0)
             eta_f[sel] = top + wave_surface(xf[sel], top - bed, waves, gmag)
     if xw.size:
-        _, nearest = cKDTree(np.column_stack([xf, yf])).query(np.column_stack([xw, yw]))
+        _, nearest = cKDTree(np.column_stack([xf, yf])).query(np.column_stack([xw, yw]),
+                                                              workers=-1)
         eta_w = eta_f[nearest]
     else:
         eta_w = np.zeros(0)

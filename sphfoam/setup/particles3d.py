@@ -185,7 +185,8 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
         pw, dw, vel = np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3))
         patch = np.zeros(0, dtype=np.int64)
     if len(pw) and len(pf):      # fluid never overlaps walls: dx/2 from every wall particle
-        d, _ = cKDTree(pw).query(pf)
+        # only whether a wall particle is nearer than dx/2: a bounded search (inf beyond)
+        d, _ = cKDTree(pw).query(pf, distance_upper_bound=0.5 * dx, workers=-1)
         ok = d >= 0.5 * dx * tol
         pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
     for w in walls:              # ... and from every solid's surface
@@ -208,7 +209,7 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
                                                        ctx.rho0)
         eta_f[sel] = top + wave_surface(x, top - bed, waves, gmag)
     if len(pw):
-        _, nearest = cKDTree(pf).query(pw)
+        _, nearest = cKDTree(pf).query(pw, workers=-1)
         p_w = wall_pressure(p_f, pf[:, 2], pw[:, 2], nearest, ctx.rho0 * gdown)
     else:
         p_w = np.zeros(0)
