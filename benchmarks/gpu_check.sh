@@ -1,26 +1,30 @@
 #!/usr/bin/env bash
-# The CUDA backend (issue 34) on a bare GPU machine, from the repository root:
+# The CUDA backend (issue 34) on a bare GPU machine, from the repository root, in two parts
+# that each fit one call of a few minutes:
 #
-#     bash benchmarks/gpu_check.sh            # (carry .whl: the wheels the machine lacks)
+#     bash benchmarks/gpu_check.sh check     # the comparisons, then the benchmarks (~5 min)
+#     bash benchmarks/gpu_check.sh runs      # tutorials end to end, the precision trade (~4 min)
 #
-# Installs the wheels in .whl/ (pydantic and its kin, meshio) into /tmp/site, then, each part
-# independent of the others' failure, everything tee'd into $OUT/*.log (total <= 6 minutes):
-#   1. nvidia-smi                                                  -> $OUT/nvidia-smi.log
-#   2. CUDA vs CPU backend on the real device (no simulator):      -> $OUT/compare.log
-#      the matched dam break and the tutorial selections the device supports, a few hundred
-#      steps at a small size (largest relative field difference per case, one JSON line each)
-#   3. sphfoam run with backend cuda: a short matched dam break and a short solitaryWave
-#                                                                  -> $OUT/run_*.log
-#   4. benchmarks/bench_gpu.py at 23k, 400k, 4M particles          -> $OUT/bench.log,
-#      $OUT/gpu-*.json and $OUT/gpu-*.md
+# Wheels the machine lacks (pydantic and its kin, meshio) are installed from .whl/ when it
+# is there. Everything goes to $OUT (default /tmp/gpu_check_out):
+#   check: check.log (the device, the install, everything printed), compare.json (every
+#          tutorial's selection against the CPU backend, benchmarks/gpu_compare.py),
+#          gpu-<date>.{json,md} and gpu-<date>-3d.{json,md} (benchmarks/bench_gpu.py: the
+#          matched dam break in 2-D at 23 k to 16 M particles and in 3-D at 131 k to ~4 M,
+#          each alone on the device)
+#   runs:  runs.log, run_solitaryWave.log, run_solitaryBeach.log (sphfoam run --backend
+#          cuda: the README's flume and the beach, as far as the part's minutes go),
+#          precision.json (benchmarks/precision_study.py --backend cuda)
 set -x
 export PYTHONUNBUFFERED=1
 OUT=${OUT:-/tmp/gpu_check_out}
 mkdir -p "$OUT"
 ROOT=$PWD
+PART=${1:-check}
+LOG="$OUT/$PART.log"
 if compgen -G ".whl/*.whl" > /dev/null; then
-    python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl \
-        2>&1 | tee "$OUT/install.log"
+    python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
+        --target /tmp/site .whl/*.whl 2>&1 | tee -a "$LOG"
     export PYTHONPATH=/tmp/site:$ROOT
 else
     export PYTHONPATH=$ROOT
@@ -28,29 +32,33 @@ fi
 export SPHFOAM_CACHE_DIR=/tmp/sphfoam_cache
 unset NUMBA_ENABLE_CUDASIM
 
-# 1. the device
-nvidia-smi 2>&1 | tee "$OUT/nvidia-smi.log"
-python3 -c "from sphfoam.engine.cuda import cuda_module; c = cuda_module(); import numba; print('numba', numba.__version__, c.__file__, 'available', c.is_available()); c.detect()" 2>&1 | tee -a "$OUT/nvidia-smi.log"
-
-# 2. CUDA against CPU on the device, a few hundred steps, small cases (about 40 s each)
-(
-  timeout 80 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300
-  timeout 50 python3 tests/cuda_compare.py solitaryWave --dx 0.1 --steps 200
-  timeout 50 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300 \
-      --edits '{"system/sphSchemes:precision": "single"}'
-) 2>&1 | tee "$OUT/compare.log"
-
-# 3. sphfoam run with backend cuda (the CLI's --backend)
-for c in damBreakMatched solitaryWave; do
+if [ "$PART" = check ]; then
   (
-    src=$ROOT/benchmarks/cases/$c; [ -d "$src" ] || src=$ROOT/tutorials/$c
-    rm -rf "/tmp/run_$c"; cp -r "$src" "/tmp/run_$c"
-    timeout 60 python3 -m sphfoam run "/tmp/run_$c" --backend cuda --end-time 0.02 --no-progress
-    echo "exit $?"; ls "/tmp/run_$c"
-  ) 2>&1 | tee "$OUT/run_$c.log"
-done
-
-# 4. the benchmark (about 3 minutes)
-timeout 200 python3 benchmarks/bench_gpu.py --sizes 23k,400k,4M --steps 20 --cpu-steps 20 \
-    --out "$OUT" 2>&1 | tee "$OUT/bench.log"
-ls -la "$OUT"
+    nvidia-smi
+    python3 -c "import numba, importlib.metadata as m; from sphfoam.engine.cuda import cuda_module; c = cuda_module(); print('numba', numba.__version__, 'numba-cuda', m.version('numba-cuda')); c.detect()"
+    python3 -c "import sphfoam.cli" && echo "sphfoam imports"
+    # 1. every tutorial's selection, CUDA against CPU, a few hundred steps (side by side)
+    timeout 210 python3 benchmarks/gpu_compare.py --jobs 14 --timeout 190 \
+        --out "$OUT/compare.json"
+    # 2. the matched dam break, alone on the device
+    timeout 170 python3 benchmarks/bench_gpu.py --dim 2 --sizes 23k,400k,4.5M,16M \
+        --steps 20 --precision double,single --budget 150 --cpu-steps 20 --out "$OUT"
+    timeout 100 python3 benchmarks/bench_gpu.py --dim 3 --sizes 131k,1.4M,5.5M \
+        --steps 10 --precision double --budget 85 --cpu-steps 5 --out "$OUT"
+    ls -la "$OUT"
+  ) 2>&1 | tee -a "$LOG"
+elif [ "$PART" = runs ]; then
+  (
+    for c in solitaryWave solitaryBeach; do
+      (
+        rm -rf "/tmp/run_$c"; cp -r "$ROOT/tutorials/$c" "/tmp/run_$c"
+        python3 -m sphfoam setup "/tmp/run_$c" && \
+        timeout 200 python3 -m sphfoam run "/tmp/run_$c" --backend cuda --no-progress
+        echo "exit $?"; ls "/tmp/run_$c"; tail -5 "/tmp/run_$c"/postProcessing/*/*/*.dat
+      ) > "$OUT/run_$c.log" 2>&1 &
+    done
+    timeout 200 python3 benchmarks/precision_study.py --backend cuda --out "$OUT/precision.json"
+    wait
+    tail -30 "$OUT"/run_*.log
+  ) 2>&1 | tee -a "$LOG"
+fi
