@@ -134,10 +134,6 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
     monitor.start(sim)
     written: list[Path] = []
     writes = write_schedule(c)
-    # a device backend says how often its state may come back for the checks (and the bar)
-    health = getattr(sim, "health_schedule", None) or Schedule("everyStep")
-    progress_due = getattr(sim, "health_schedule", None) or Schedule("everyStep")
-    # (the bar itself redraws at most every 0.2 s)
     eps = 1e-9 * max(c.writeInterval, 1e-300)
     bar = _Progress(progress, t0, t_end, state.n, console)
     pool = RunThreads(c.threads if threads is None else threads,
@@ -162,12 +158,11 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
             if landed:
                 sim.time = target          # land exactly, so restarts see the same time
             report.steps += 1
-            if health.due(sim.step_index, sim.time, t_prev):
-                diagnosis = monitor.check(sim, dt, landed)
-                if diagnosis is not None:      # nothing of this step is written or sampled
-                    report.failure = diagnosis
-                    _blow_up(case, sim, monitor, diagnosis, start_name, log)
-                    raise BlowUp(diagnosis, report)
+            diagnosis = monitor.check(sim, dt, landed)
+            if diagnosis is not None:          # nothing of this step is written or sampled
+                report.failure = diagnosis
+                _blow_up(case, sim, monitor, diagnosis, start_name, log)
+                raise BlowUp(diagnosis, report)
             wrote = writes.due(sim.step_index, sim.time, t_prev) or sim.time >= t_end - eps
             if wrote:
                 try:
@@ -182,8 +177,7 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
             for fo in functions.values():
                 if fo.due(sim, wrote, t_prev):
                     fo.execute(sim)
-            if progress_due.due(sim.step_index, sim.time, t_prev):
-                bar.update(sim, dt)
+            bar.update(sim, dt)                # (it redraws at most every 0.2 s)
     except KeyboardInterrupt:
         done = _written_already(case, sim, start_name)
         if done is not None and (not written or written[-1] != done):
@@ -348,6 +342,12 @@ class _StopRequest:
             sys.unraisablehook = self._unraisable
 
 
+def _particles(sim) -> int:
+    """The particle count, without copying a device backend's state back."""
+    n = getattr(sim, "n", None)
+    return int(n) if n is not None else sim.state.n
+
+
 class _Progress:
     """A rich progress bar: sim time, step, dt, steps/s, particles, ETA. It draws on
     ``console`` (rich's own by default); log lines printed on that console while it runs go
@@ -379,7 +379,7 @@ class _Progress:
     def _fields(self, sim, dt, now):
         done = self.total if sim.time >= self.t_end * (1 - 1e-12) else sim.time - self.t0
         return dict(completed=min(done, self.total), t=sim.time, step=sim.step_index, dt=dt,
-                    rate=self.steps / max(now - self.w0, 1e-9), n=sim.state.n)
+                    rate=self.steps / max(now - self.w0, 1e-9), n=_particles(sim))
 
     def update(self, sim, dt):
         if not self.enabled:

@@ -14,7 +14,7 @@ from sphfoam.case.errors import CaseError
 from sphfoam.case.schemas import StabilityChecks
 from sphfoam.cli import app
 from sphfoam.engine.health import (DENSITY, NONFINITE, SPEED, BlowUp, HealthMonitor, offenders,
-                                   scan)
+                                   scan, scan_arrays)
 from sphfoam.engine.simulation import Removal
 from sphfoam.engine.state import FLUID, GHOST, WALL, ParticleState
 from sphfoam.io.fields import read_state
@@ -35,11 +35,14 @@ def synthetic(n_fluid=10, n_wall=3, n_ghost=2) -> ParticleState:
 
 
 def run_scan(st, lo=0.5, hi=2.0, vmax=C0):
-    return scan(st.x, st.y, st.u, st.v, st.rho, st.m, st.kind, lo * RHO0, hi * RHO0, vmax ** 2)
+    x, y, z, u, v, w, three = scan_arrays(st)
+    return scan(x, y, z, u, v, w, st.rho, st.m, st.kind, three, lo * RHO0, hi * RHO0,
+                vmax ** 2)
 
 
 def bad(st, what, lo=0.5, hi=2.0, vmax=C0):
-    return offenders(st.x, st.y, st.u, st.v, st.rho, st.kind, what, lo * RHO0, hi * RHO0,
+    x, y, z, u, v, w, three = scan_arrays(st)
+    return offenders(x, y, z, u, v, w, st.rho, st.kind, three, what, lo * RHO0, hi * RHO0,
                      vmax ** 2).tolist()
 
 

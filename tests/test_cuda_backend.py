@@ -77,3 +77,24 @@ def test_backend_is_a_checked_schemes_entry(tutorial):
         == "cuda"
     with pytest.raises(Exception, match="backend"):
         Case(tutorial("damBreak", {"system/sphSchemes:backend": "opencl"})).schemes
+
+
+def test_health_checks_run_on_the_device():
+    """The per-step checks as device reductions: the same counts and largest speed as the
+    host scan of the same state, the sums to round-off; the last good state kept on the
+    device (the start) comes back equal; a NaN is caught at the next check and named."""
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, str(ROOT / "tests" / "cuda_health.py")], env=env,
+                         capture_output=True, text=True, timeout=900)
+    line = [x for x in out.stdout.splitlines() if x.startswith("RESULT ")]
+    assert line, out.stdout[-2000:] + out.stderr[-4000:]
+    res = json.loads(line[-1][7:])
+    assert "error" not in res, res
+    assert res["passed"] == [True, True, True]
+    dev, host = res["device"], res["host"]
+    assert dev[:4] == host[:4] and dev[6] == host[6], res      # counts, largest speed^2
+    assert dev[2] > 0                                          # the speed check counted
+    for i in (4, 5):                                           # kinetic energy, mass
+        assert abs(dev[i] - host[i]) <= 1e-12 * abs(host[i]), res
+    assert res["kept_time"] == 0.0 and res["kept_equals_start"], res
+    assert res["nan_kind"] == "nan" and res["nan_ids"] == [res["nan_id"]], res

@@ -38,12 +38,13 @@ NONFINITE, DENSITY, SPEED = 0, 1, 2
 
 # --- compiled passes (no fastmath: the NaN tests must survive) -----------------------------
 @njit(cache=True)
-def scan(x, y, u, v, rho, m, kind, rho_lo, rho_hi, speed2_max):
-    """One pass over the particles; ghosts are skipped.
+def scan(x, y, z, u, v, w, rho, m, kind, three, rho_lo, rho_hi, speed2_max):
+    """One pass over the particles; ghosts are skipped. ``three``: z and w are read (in
+    2-D they stand for y and v and are not).
 
-    Returns (non-finite x, y, u, v or rho among fluid and wall particles, fluid densities
-    outside [rho_lo, rho_hi], fluid particles with u^2 + v^2 > speed2_max, the largest fluid
-    u^2 + v^2, fluid kinetic energy, fluid mass, finite fluid particles).
+    Returns (non-finite positions, velocities or rho among fluid and wall particles, fluid
+    densities outside [rho_lo, rho_hi], fluid particles with |v|^2 > speed2_max, the largest
+    fluid |v|^2, fluid kinetic energy, fluid mass, finite fluid particles).
     """
     n_bad = 0
     n_rho = 0
@@ -56,8 +57,7 @@ def scan(x, y, u, v, rho, m, kind, rho_lo, rho_hi, speed2_max):
         k = kind[a]
         if k == GHOST:
             continue
-        if not (math.isfinite(x[a]) and math.isfinite(y[a]) and math.isfinite(u[a])
-                and math.isfinite(v[a]) and math.isfinite(rho[a])):
+        if not _finite(x, y, z, u, v, w, rho, three, a):
             n_bad += 1
             continue
         if k != FLUID:
@@ -65,7 +65,7 @@ def scan(x, y, u, v, rho, m, kind, rho_lo, rho_hi, speed2_max):
         n_fluid += 1
         if not (rho[a] >= rho_lo and rho[a] <= rho_hi):
             n_rho += 1
-        s2 = u[a] * u[a] + v[a] * v[a]
+        s2 = _speed2(u, v, w, three, a)
         if s2 > speed2_max:
             n_fast += 1
         if s2 > s2max:
@@ -75,8 +75,25 @@ def scan(x, y, u, v, rho, m, kind, rho_lo, rho_hi, speed2_max):
     return n_bad, n_rho, n_fast, s2max, ke, mass, n_fluid
 
 
+@njit(cache=True, inline="always")
+def _finite(x, y, z, u, v, w, rho, three, a):
+    ok = (math.isfinite(x[a]) and math.isfinite(y[a]) and math.isfinite(u[a])
+          and math.isfinite(v[a]) and math.isfinite(rho[a]))
+    if three:
+        ok = ok and math.isfinite(z[a]) and math.isfinite(w[a])
+    return ok
+
+
+@njit(cache=True, inline="always")
+def _speed2(u, v, w, three, a):
+    s2 = u[a] * u[a] + v[a] * v[a]
+    if three:
+        s2 += w[a] * w[a]
+    return s2
+
+
 @njit(cache=True)
-def offenders(x, y, u, v, rho, kind, what, rho_lo, rho_hi, speed2_max):
+def offenders(x, y, z, u, v, w, rho, kind, three, what, rho_lo, rho_hi, speed2_max):
     """Indices of the particles failing check ``what`` (NONFINITE, DENSITY or SPEED), with
     the same rules as :func:`scan`."""
     out = np.empty(x.shape[0], dtype=np.int64)
@@ -84,8 +101,7 @@ def offenders(x, y, u, v, rho, kind, what, rho_lo, rho_hi, speed2_max):
     for a in range(x.shape[0]):
         if kind[a] == GHOST:
             continue
-        finite = (math.isfinite(x[a]) and math.isfinite(y[a]) and math.isfinite(u[a])
-                  and math.isfinite(v[a]) and math.isfinite(rho[a]))
+        finite = _finite(x, y, z, u, v, w, rho, three, a)
         if what == NONFINITE:
             bad = not finite
         elif not finite or kind[a] != FLUID:
@@ -93,11 +109,17 @@ def offenders(x, y, u, v, rho, kind, what, rho_lo, rho_hi, speed2_max):
         elif what == DENSITY:
             bad = not (rho[a] >= rho_lo and rho[a] <= rho_hi)
         else:
-            bad = u[a] * u[a] + v[a] * v[a] > speed2_max
+            bad = _speed2(u, v, w, three, a) > speed2_max
         if bad:
             out[k] = a
             k += 1
     return out[:k]
+
+
+def scan_arrays(st) -> tuple:
+    """(x, y, z, u, v, w, three) of a state for :func:`scan` and :func:`offenders`."""
+    three = st.dim == 3
+    return (st.x, st.y, st.z if three else st.y, st.u, st.v, st.w if three else st.v, three)
 
 
 # --- the diagnosis -------------------------------------------------------------------------
@@ -192,11 +214,20 @@ class Snapshot:
         self.arrays: dict[str, np.ndarray] = {}
         self.extra: tuple[str, ...] = ()
         self.n = -1
+        self._device = None       # a device backend's copy (``keep_snapshot``)
         self.time = math.nan
         self.step = -1
         self.dt = math.nan
 
     def take(self, sim) -> None:
+        keep = getattr(sim, "keep_snapshot", None)
+        if keep is not None:
+            # a device backend keeps it on the device (now and then), copied back on demand
+            self._device = keep(self._device)
+            self.arrays, self.n = {}, -1
+            self.time, self.step, self.dt = self._device.time, self._device.step, \
+                self._device.dt
+            return
         st = sim.state
         real = st.kind != GHOST if getattr(sim, "mirror", False) else None
         n = st.n if real is None else int(np.count_nonzero(real))
@@ -221,8 +252,20 @@ class Snapshot:
         else:
             np.compress(real, src, out=self.arrays[key])
 
+    def _host(self) -> None:
+        """The device backend's copy brought back (ghosts left out), once."""
+        if self._device is None or self.arrays:
+            return
+        st = self._device.host()
+        real = st.kind != GHOST
+        self.extra = tuple(st.extra)
+        self.arrays = {k: getattr(st, k)[real] for k in st.persistent_f8 + PERSISTENT_I8}
+        self.arrays.update({k: st.extra[k][real] for k in self.extra})
+        self.n = int(np.count_nonzero(real))
+
     def state(self) -> ParticleState:
         """The snapshot as a ParticleState (copies, so the snapshot can be reused)."""
+        self._host()
         a = {k: v.copy() for k, v in self.arrays.items()}
         return ParticleState(a["x"], a["y"], a["u"], a["v"], a["rho"], a["m"], a["kind"],
                              a["id"], {k: a[k] for k in self.extra}, z=a.get("z"),
@@ -230,6 +273,7 @@ class Snapshot:
 
     def pressure(self, sim) -> np.ndarray:
         """Pressure of the snapshot from the case's equation of state."""
+        self._host()
         rho = self.arrays["rho"].copy()
         p, c = np.empty_like(rho), np.empty_like(rho)
         sim.pipeline.equation_of_state(rho, p, c, sim.prm)
@@ -237,6 +281,7 @@ class Snapshot:
 
     def positions_of(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions in the snapshot of the particles with these ids (those it holds)."""
+        self._host()
         hit = np.isin(self.arrays["id"], ids)
         return self.arrays["x"][hit], self.arrays["y"][hit]
 
@@ -298,16 +343,21 @@ class HealthMonitor:
         if not self.enabled:
             # a step that is not a positive number would never end the time loop: stop anyway
             return self._dt_failure(sim, self._dt_message(dt)) if dt_bad else None
-        st = sim.state
         lo, hi = self.ratio[0] * self.rho0, self.ratio[1] * self.rho0
         vlim2 = self.speed_limit ** 2
-        n_bad, n_rho, n_fast, s2max, ke, mass, n_fluid = scan(
-            st.x, st.y, st.u, st.v, st.rho, st.m, st.kind, lo, hi, vlim2)
+        device_scan = getattr(sim, "health_scan", None)   # a device backend's reductions
+        if device_scan is not None:
+            n_bad, n_rho, n_fast, s2max, ke, mass, n_fluid = device_scan(lo, hi, vlim2)
+        else:
+            st = sim.state
+            x, y, z, u, v, w, three = scan_arrays(st)
+            n_bad, n_rho, n_fast, s2max, ke, mass, n_fluid = scan(
+                x, y, z, u, v, w, st.rho, st.m, st.kind, three, lo, hi, vlim2)
         if n_bad:
+            idx, st = self._offenders(sim, NONFINITE, lo, hi, vlim2)
             n_real = int(np.count_nonzero(st.kind != GHOST))
-            idx = offenders(st.x, st.y, st.u, st.v, st.rho, st.kind, NONFINITE, lo, hi, vlim2)
-            fields = [k for k in ("x", "y", "u", "v", "rho")
-                      if not np.isfinite(getattr(st, k)[idx]).all()]
+            fields = [k for k in ("x", "y", "z", "u", "v", "w", "rho")
+                      if hasattr(st, k) and not np.isfinite(getattr(st, k)[idx]).all()]
             return self._particles(sim, "nan", idx,
                                    f"{n_bad} of {n_real} particles have a non-finite "
                                    f"{'/'.join(fields)} (NaN or infinity)")
@@ -320,14 +370,14 @@ class HealthMonitor:
                 sim, f"the time step fell to {dt:.4g} s, {dt / self.dt_ref:.3g} of the run's "
                 f"first step {self.dt_ref:.4g} s; limit minDeltaT = {self.min_dt:g}")
         if n_rho:
-            idx = offenders(st.x, st.y, st.u, st.v, st.rho, st.kind, DENSITY, lo, hi, vlim2)
+            idx, st = self._offenders(sim, DENSITY, lo, hi, vlim2)
             r = st.rho[idx] / self.rho0
             return self._particles(sim, "density", idx,
                                    f"{n_rho} fluid particles have rho/rho0 outside "
                                    f"densityRatio ({self.ratio[0]:g} {self.ratio[1]:g}): from "
                                    f"{r.min():.4g} to {r.max():.4g}")
         if n_fast:
-            idx = offenders(st.x, st.y, st.u, st.v, st.rho, st.kind, SPEED, lo, hi, vlim2)
+            idx, _ = self._offenders(sim, SPEED, lo, hi, vlim2)
             return self._particles(sim, "escape", idx,
                                    f"{n_fast} fluid particles are faster than maxSpeed c0 = "
                                    f"{self.max_speed:g} x {self.c0:.4g} m/s: up to "
@@ -345,7 +395,8 @@ class HealthMonitor:
                               ids, Region.of(where[:, 0], where[:, 1]))
         ke_ref = 0.5 * mass * (0.1 * self.c0) ** 2
         if mass > 0 and ke > self.max_ke * ke_ref:
-            s2 = np.where(st.kind == FLUID, st.u ** 2 + st.v ** 2, -1.0)
+            st = sim.state
+            s2 = np.where(st.kind == FLUID, sum(c ** 2 for c in st.velocities), -1.0)
             k = min(MAX_IDS, n_fluid)
             idx = np.argpartition(-s2, k - 1)[:k]
             idx = idx[np.argsort(-s2[idx])]
@@ -356,6 +407,13 @@ class HealthMonitor:
                                    f"maxKineticEnergy = {self.max_ke:g}; the fastest "
                                    f"particles move at up to {math.sqrt(s2max):.4g} m/s")
         return None
+
+    @staticmethod
+    def _offenders(sim, what, lo, hi, vlim2):
+        """(indices of the particles failing ``what``, the state they index)."""
+        st = sim.state
+        x, y, z, u, v, w, three = scan_arrays(st)
+        return offenders(x, y, z, u, v, w, st.rho, st.kind, three, what, lo, hi, vlim2), st
 
     @staticmethod
     def _dt_message(dt: float) -> str:
@@ -372,7 +430,8 @@ class HealthMonitor:
         st = sim.state
         h = float(getattr(sim, "h", 1.0))
         with np.errstate(all="ignore"):
-            local = np.minimum(h / (st.c + st.sigma), np.sqrt(h / np.hypot(st.ax, st.ay)))
+            force = np.sqrt(sum(a.astype(np.float64) ** 2 for a in st.accelerations))
+            local = np.minimum(h / (st.c + st.sigma), np.sqrt(h / force))
         local = np.where(np.isnan(local), -np.inf, local)
         local = np.where(st.kind == FLUID, local, np.inf)
         k = min(MAX_IDS, st.n_fluid)

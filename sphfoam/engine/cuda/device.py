@@ -263,3 +263,80 @@ def prescribe_patch(x, y, u, v, patch, x0, y0, which, ox, oy, uu, vv):
         y[a] = y0[a] + oy
         u[a] = uu
         v[a] = vv
+
+
+# --- the health checks (sphfoam.engine.health.scan on the device) ---------------------------
+@cuda.jit
+def health_reduce(x, y, z, u, v, w, rho, m, kind, three, rho_lo, rho_hi, speed2_max,
+                  acc, partial):
+    """The per-step checks of :func:`sphfoam.engine.health.scan`, ghosts skipped: into
+    ``acc[0:4]`` the counts of non-finite particles, of fluid densities out of range, of
+    fluid too fast and of finite fluid (atomic adds of 1.0: exact), ``acc[4]`` the largest
+    fluid speed^2 (an exact atomic maximum), and ``partial[block]`` the block's kinetic
+    energy and mass in a fixed order (:func:`sum_partials` adds the blocks into ``acc[5:7]``,
+    so the sums do not depend on the scheduling). ``three``: z and w are read (else they
+    stand for y and v and are not)."""
+    ske = cuda.shared.array(128, dtype=np.float64)
+    sm = cuda.shared.array(128, dtype=np.float64)
+    a = cuda.grid(1)
+    t = cuda.threadIdx.x
+    ke = 0.0
+    mass = 0.0
+    if a < x.shape[0] and kind[a] != 2:
+        s2 = float(u[a]) * float(u[a]) + float(v[a]) * float(v[a])
+        finite = math.isfinite(x[a]) and math.isfinite(y[a]) and math.isfinite(u[a]) \
+            and math.isfinite(v[a]) and math.isfinite(rho[a])
+        if three:
+            s2 += float(w[a]) * float(w[a])
+            finite = finite and math.isfinite(z[a]) and math.isfinite(w[a])
+        if not finite:
+            cuda.atomic.add(acc, 0, 1.0)
+        elif kind[a] == 0:
+            cuda.atomic.add(acc, 3, 1.0)
+            if not (rho[a] >= rho_lo and rho[a] <= rho_hi):
+                cuda.atomic.add(acc, 1, 1.0)
+            if s2 > speed2_max:
+                cuda.atomic.add(acc, 2, 1.0)
+            cuda.atomic.max(acc, 4, s2)
+            ke = 0.5 * float(m[a]) * s2
+            mass = float(m[a])
+    ske[t] = ke
+    sm[t] = mass
+    cuda.syncthreads()
+    s = 64
+    while s > 0:
+        if t < s:
+            ske[t] += ske[t + s]
+            sm[t] += sm[t + s]
+        cuda.syncthreads()
+        s //= 2
+    if t == 0:
+        partial[cuda.blockIdx.x, 0] = ske[0]
+        partial[cuda.blockIdx.x, 1] = sm[0]
+
+
+@cuda.jit
+def sum_partials(partial, out):
+    """out[5 + j] = sum over the blocks of partial[:, j] (one block: each thread a fixed
+    stride, then a fixed tree)."""
+    s0 = cuda.shared.array(128, dtype=np.float64)
+    s1 = cuda.shared.array(128, dtype=np.float64)
+    t = cuda.threadIdx.x
+    a0 = 0.0
+    a1 = 0.0
+    for i in range(t, partial.shape[0], 128):
+        a0 += partial[i, 0]
+        a1 += partial[i, 1]
+    s0[t] = a0
+    s1[t] = a1
+    cuda.syncthreads()
+    s = 64
+    while s > 0:
+        if t < s:
+            s0[t] += s0[t + s]
+            s1[t] += s1[t + s]
+        cuda.syncthreads()
+        s //= 2
+    if t == 0:
+        out[5] = s0[0]
+        out[6] = s1[0]

@@ -17,12 +17,11 @@ import numpy as np
 
 from sphfoam.engine.cuda import cuda_module
 from sphfoam.engine.neighbours import CellList
-from sphfoam.engine.schedule import Schedule
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.stepping import StepContext, advance, components, field_components
 
-#: steps between the time loop's health checks (the state copied back for them)
-HEALTH_EVERY = 100
+#: the health monitor's last good state is kept on the device every this many passing steps
+SNAPSHOT_EVERY = 10
 
 _STATE_F8 = ("x", "y")
 _STATE_W = ("u", "v", "rho", "m")
@@ -71,12 +70,54 @@ class _DeviceStepContext(StepContext):
         return self._sim._dstate
 
 
+class DeviceSnapshot:
+    """Device copies of the state's arrays at one step (the health monitor's last good
+    state), with that step's time, index and time step; ``host()`` copies them back."""
+
+    def __init__(self):
+        self.arrays: dict = {}
+        self.fields: tuple = ()
+        self.time = math.nan
+        self.step = -1
+        self.dt = math.nan
+
+    @classmethod
+    def of(cls, sim, kept: "DeviceSnapshot | None") -> "DeviceSnapshot":
+        snap = kept if kept is not None else cls()
+        src = {k: a for k, a in sim.d.items() if k not in _SCRATCH}
+        src.update({f"extra.{k}": a for k, a in sim.d_extra.items()})
+        src["fld"] = sim.d_fld
+        for k, a in src.items():
+            dst = snap.arrays.get(k)
+            if dst is None or dst.shape != a.shape or dst.dtype != a.dtype:
+                dst = sim.cuda.device_array(a.shape, dtype=a.dtype)
+                snap.arrays[k] = dst
+            dst.copy_to_device(a)
+        for k in [k for k in snap.arrays if k not in src]:
+            del snap.arrays[k]
+        snap.fields = tuple(sim.module.FIELDS)
+        snap.time, snap.step, snap.dt = float(sim.time), int(sim.step_index), \
+            float(sim.last_dt)
+        return snap
+
+    def host(self) -> ParticleState:
+        """The kept state copied back."""
+        a = {k: v.copy_to_host() for k, v in self.arrays.items()}
+        extra = {k[6:]: v for k, v in a.items() if k.startswith("extra.")}
+        for i, k in enumerate(self.fields):
+            extra[k] = a["fld"][i]
+        return ParticleState(a["x"], a["y"], a["u"], a["v"], a["rho"], a["m"], a["kind"],
+                             a["id"], extra, z=a.get("z"), w=a.get("w"))
+
+
 class CudaSimulation:
     """The particle state stepped by the CUDA kernels of a selection."""
 
-    #: the reductions' starting values (the list check's maxima; the time step's min, max)
+    #: the reductions' starting values (the list check's maxima; the time step's min, max;
+    #: the health checks' counts, maximum and sums)
     _RED_CHECK = np.zeros(3)
     _RED_DT = np.array([math.inf, 0.0, 0.0])
+    _HEALTH0 = np.zeros(7)
 
     def __init__(self, state: ParticleState, pipeline, integrator, *, domain_lo, domain_hi,
                  beta: float, force_condition: bool, adjust_time_step: bool, delta_t: float,
@@ -141,10 +182,10 @@ class CudaSimulation:
         self._dstate = _DeviceState(self)
         self._stepping = _DeviceStepContext(self)
         self._dirty = False
-        #: the time loop's health checks and progress bar read the state on the host: every
-        #: HEALTH_EVERY steps here, not every step (a blow-up is then caught up to that many
-        #: steps late; the checks have no device form yet)
-        self.health_schedule = Schedule("timeStep", HEALTH_EVERY)
+        #: the health checks run on the device after every step (``health_scan``), their last
+        #: good state is kept there (``keep_snapshot``)
+        self._health = None
+        self._snapshot_calls = 0
 
     # --- host <-> device ------------------------------------------------------------------
     def _to(self, a, dtype):
@@ -497,6 +538,36 @@ class CudaSimulation:
         if a in adv:
             return self._pU[adv.index(a)]
         raise ValueError(f"integrator {self.integrator.name!r}: unknown array {a!r}")
+
+    # --- the health checks and the last good state, on the device -------------------------
+    def health_scan(self, rho_lo: float, rho_hi: float, speed2_max: float) -> tuple:
+        """:func:`sphfoam.engine.health.scan` as device reductions: (non-finite, densities
+        out of range, too fast, largest speed^2, kinetic energy, mass, finite fluid), 56
+        bytes back."""
+        D, d, n = self.D, self.d, self.n
+        nb = D.blocks(n)
+        if self._health is None or self._health[1].shape[0] < nb:
+            self._health = (self.cuda.device_array(7, dtype=np.float64),
+                            self.cuda.device_array((nb, 2), dtype=np.float64))
+        acc, partial = self._health
+        self._put(acc, self._HEALTH0)
+        three = self.dim == 3
+        z, w = (d["z"], d["w"]) if three else (d["y"], d["v"])
+        self._timed("health", self._launch, D.health_reduce, n, d["x"], d["y"], z, d["u"],
+                    d["v"], w, d["rho"], d["m"], d["kind"], three, float(rho_lo),
+                    float(rho_hi), float(speed2_max), acc, partial[:nb])
+        D.sum_partials[1, D.THREADS](partial[:nb], acc)
+        bad, n_rho, fast, fluid, s2max, ke, mass = self._get(acc)
+        return int(bad), int(n_rho), int(fast), float(s2max), float(ke), float(mass), int(fluid)
+
+    def keep_snapshot(self, kept):
+        """The state as it is now, copied on the device into ``kept`` (a
+        :class:`DeviceSnapshot`, reused; None: a new one), every ``SNAPSHOT_EVERY``-th call:
+        the health monitor's last good state, copied back only after a failure."""
+        self._snapshot_calls += 1
+        if kept is not None and (self._snapshot_calls - 1) % SNAPSHOT_EVERY:
+            return kept
+        return DeviceSnapshot.of(self, kept)
 
     # --- stepping -------------------------------------------------------------------------
     def step(self, dt_remaining: float = math.inf) -> float:
