@@ -71,7 +71,7 @@ for k in range(nb_start[a], nb_start[a + 1]):
 _HALF = """\
 for k in range(half[a], nb_start[a + 1]):
     b = nb_idx[k]
-{rel}    r2 = {r2}
+{rel}{wrap}    r2 = {r2}
     if r2 >= support2 or r2 == 0.0:   # beyond the support now, or coincident (grad W = 0)
         continue
     q = math.sqrt(r2) * inv_h
@@ -275,12 +275,15 @@ class LoopBodies:
                          f"elif d{ax}_ab < -half_l{ax}:\n    d{ax}_ab += l{ax}\n")
         return wrap
 
+    def _wrap_block(self) -> str:
+        """:meth:`_wrap` indented for the list loop templates."""
+        wrap = self._wrap()
+        return _block(wrap, 4) + ("\n" if wrap else "")
+
     def pair_loop(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
         """The loop over the neighbour list of particle ``a`` with ``terms`` for each b."""
-        wrap = self._wrap()
         cache = cache if self.plan.cache else None
-        return _LIST.format(**self._pair_geometry(),
-                            wrap=_block(wrap, 4) + ("\n" if wrap else ""),
+        return _LIST.format(**self._pair_geometry(), wrap=self._wrap_block(),
                             body=_block(self.neighbour_body(terms, sigma, cache), 4))
 
     def particle_code(self, terms: list, part: str) -> str:
@@ -313,7 +316,7 @@ class LoopBodies:
                 "\n".join(f"{n}_b = 0.0" for n in sums),
                 "\n".join(self._x(self._code(t, "reaction")) for t in ts if t.reaction),
                 "\n".join(f"hs[S_{n}, b] += {n}_b" for n in sums)]
-        loop = _HALF.format(**self._pair_geometry(),
+        loop = _HALF.format(**self._pair_geometry(), wrap=self._wrap_block(),
                             body=_block("\n".join(body), 4))
         return "\n".join((self.particle_code(ts, "init"), loop,
                           "\n".join(f"hs[S_{n}, a] += {n}" for n in sums)))
@@ -422,7 +425,7 @@ class LoopBodies:
         if stage == "rates":
             body.append(self._x("out_a@[b] += acc_b_@"))
         body.append("out_drho[b] += drho_b")
-        loop = _HALF.format(**self._pair_geometry(),
+        loop = _HALF.format(**self._pair_geometry(), wrap=self._wrap_block(),
                             body=_block("\n".join(body), 4))
         init = self.particle_code(terms, "init")
         return "\n".join(x for x in (init, loop) if x)

@@ -131,23 +131,31 @@ for cz0 in range({zlo}, {zhi}):
 """
 
 
-def _axis_range(per: bool, i: str, n: str, name: str):
-    """The cell range of one axis around index ``i`` (wrapped where periodic)."""
-    if per:
+def _axis_range(sel, axis: str, i: str, n: str, name: str):
+    """(first, end, cell) of the loop ``for <name>0 in range(first, end): <name> = cell``
+    over the cells of ``axis`` around index ``i``. Along a periodic axis the three cells
+    wrap; across the half lists' bands (:attr:`Selection.band_axis`) they are visited in
+    increasing index, i - 1, i, i + 1 with the wrapped one moved to its place, so that the
+    list, like the walk over particles sorted by cell, holds each particle's b < a before
+    its b > a (:func:`sphfoam.engine.neighbours.half_lists`)."""
+    if not sel.periodic(axis):
+        return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
+    if axis == sel.band_axis:
         return f"{i} - 1", f"{i} + 2", f"{name}0 % {n}"
-    return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
+    turn = f"(1 if {i} == 0 else 2 if {i} == {n} - 1 else 0)"
+    return "0", "3", f"({i} - 1 + ({name}0 + {turn}) % 3) % {n}"
 
 
 def _cell_walk_3d(bodies, body: str, rows: str | None, count: bool) -> str:
     sel = bodies.plan.sel
     wrap = bodies._wrap()
-    xlo, xhi, cx = _axis_range(sel.periodic_x, "ix", "ncx", "cx")
-    ylo, yhi, cy = _axis_range(sel.periodic_y, "iy", "ncy", "cy")
-    zlo, zhi, cz = _axis_range(sel.periodic_z, "iz", "ncz", "cz")
+    xlo, xhi, cx = _axis_range(sel, "x", "ix", "ncx", "cx")
+    ylo, yhi, cy = _axis_range(sel, "y", "iy", "ncy", "cy")
+    zlo, zhi, cz = _axis_range(sel, "z", "iz", "ncz", "cz")
     fo = bodies.plan.fluid_pairs_only
     if rows is not None and not sel.periodic_x:
         notself = "" if count and bodies.plan.counts_self() else " & (b != a)"
-        cy = "(cy0 % ncy)" if sel.periodic_y else "cy0"
+        cy = f"({cy})"
         return _CELLS_ROWS_3D.format(ylo=ylo, yhi=yhi, cy=cy, zlo=zlo, zhi=zhi, cz=cz,
                                      notself=notself,
                                      keep=" & (fluid_a | (ks[j] == FLUID))" if fo else "",
@@ -170,9 +178,10 @@ def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -
     sel = bodies.plan.sel
     if sel.dim == 3:
         return _cell_walk_3d(bodies, body, rows, count)
+    xlo, xhi, cx = _axis_range(sel, "x", "ix", "ncx", "cx")
+    ylo, yhi, cy = _axis_range(sel, "y", "iy", "ncy", "cy")
     if rows is not None and not sel.periodic_x:
-        ylo, yhi, cy = (("iy - 1", "iy + 2", "(cy0 % ncy)") if sel.periodic_y
-                        else ("max(iy - 1, 0)", "min(iy + 2, ncy)", "cy0"))
+        cy = f"({cy})"
         wrap = bodies._wrap()
         notself = "" if count and bodies.plan.counts_self() else " & (b != a)"
         fo = bodies.plan.fluid_pairs_only
@@ -181,14 +190,6 @@ def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -
                                   kslice="    ks = kind[lo:hi]\n" if fo else "",
                                   wrap=_block(wrap, 8) + ("\n" if wrap else ""),
                                   body=_block(rows, 8))
-
-    def axis(per, i, n, name):
-        if per:
-            return f"{i} - 1", f"{i} + 2", f"{name}0 % {n}"
-        return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
-
-    xlo, xhi, cx = axis(sel.periodic_x, "ix", "ncx", "cx")
-    ylo, yhi, cy = axis(sel.periodic_y, "iy", "ncy", "cy")
     wrap = bodies._wrap()
     return _CELLS.format(xlo=xlo, xhi=xhi, ylo=ylo, yhi=yhi, cx=cx, cy=cy,
                          keep=(" or not (fluid_a or kind[b] == FLUID)"

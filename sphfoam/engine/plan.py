@@ -57,6 +57,17 @@ class Selection:
         return self.periodic_x or self.periodic_y or self.periodic_z
 
     @property
+    def band_axis(self) -> str:
+        """The axis the half lists' bands follow (rows of cells along y in 2-D, layers
+        along z in 3-D): where it is periodic the last band's pairs wrap to the first, so
+        the stages gather over full lists."""
+        return "y" if self.dim == 2 else "z"
+
+    @property
+    def bands_periodic(self) -> bool:
+        return self.periodic(self.band_axis)
+
+    @property
     def dtype(self):
         """The numpy type of the working arrays and coefficients."""
         return np.dtype(np.float32 if self.precision == "single" else np.float64)
@@ -302,7 +313,7 @@ class Plan:
         quantities with their parity; no periodic axis; and every loop that reads what the
         prepass makes, or its pair cache (stored for each pair once, at a's entry, where the
         half-list loops read it), is a half-list loop itself."""
-        if self.sel.any_periodic:
+        if self.sel.bands_periodic:
             return None
         groups = self._prepass_groups()
         if len(groups) != 1:
@@ -336,10 +347,10 @@ class Plan:
     def half_terms(self, stage: str):
         """(fluid terms, wet-wall terms) of ``stage`` when each of its pairs can be evaluated
         once for both particles (every term with pair code declares its ``reaction``, none
-        has ``final`` code, every definer of a pair quantity its ``parity``; no periodic
-        axis; the bands of the half-list loops are rows of cells in 2-D, layers of cells in
-        3-D), else None: then the stage is only the gather over full lists."""
-        if self.sel.any_periodic:
+        has ``final`` code, every definer of a pair quantity its ``parity``; the bands of
+        the half-list loops, rows of cells in 2-D and layers of cells in 3-D, not
+        periodic), else None: then the stage is only the gather over full lists."""
+        if self.sel.bands_periodic:
             return None
         fluid = self.needed(self.stage(stage, "fluid"))
         wet = []
