@@ -99,3 +99,21 @@ def test_backend_is_a_checked_schemes_entry(tutorial):
         == "cuda"
     with pytest.raises(Exception, match="backend"):
         Case(tutorial("damBreak", {"system/sphSchemes:backend": "opencl"})).schemes
+
+
+def test_a_3d_case_is_served_and_a_motion_with_no_3d_form_is_refused_by_name(tutorial):
+    from sphfoam.assemble import selection
+    from sphfoam.case.case import Case
+    from sphfoam.engine.cuda.build import Unsupported, check_supported, parameters
+    from sphfoam import registry
+
+    case = Case(tutorial("solitaryWave3D"))
+    sel = selection(case)
+    check_supported(sel, case.models.motions)       # the piston paddle has a 3-D form
+    prm = parameters(sel, case.context, (-1.5, 0.0, -0.5), (23.0, 0.55, 2.5))
+    assert prm["gz"] == case.context.g[2] and prm["ly"] == prm["half_ly"] * 2 == 0.55
+    assert "lx" not in prm and "lz" not in prm
+    table = registry.build("motion", {"type": "displacementTable",
+                                      "table": [(0.0, (0.0, 0.0)), (1.0, (0.1, 0.0))]})
+    with pytest.raises(Unsupported, match="motion 'displacementTable': no 3-D form"):
+        check_supported(sel, {1: table})
