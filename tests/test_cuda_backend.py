@@ -37,11 +37,19 @@ _SOLITARY_3D = {"system/particleDict:fluid.water.max": [0.2, 0.55, 0.2],
                 "system/particleDict:domain.max": [0.5, 0.55, 0.5],
                 "constant/sphProperties:densityFilter.every": 1}
 
+#: damBreakMatched3D cut to a cube of fluid 9 dx a side at dx = 0.1, no walls, periodic in
+#: x, y and z (3 cells each): every particle's walk wraps in some axis
+_CUBE_3D = {"system/particleDict:walls": None,
+            "system/particleDict:fluid.column.max": [0.9, 0.9, 0.9],
+            "system/particleDict:domain": {"min": [0, 0, 0], "max": [0.9, 0.9, 0.9],
+                                           "periodic": ["x", "y", "z"]}}
+
 #: (case, dx, steps, edits): the matched case (always, about 80 s on the simulator); a
 #: periodic one, couette at 11 columns across its period (always, about 20 s: the cell walk
-#: and the pairs wrapped in x, the sliding wall); a 3-D one, the cut solitaryWave3D above
-#: (always, about 30 s: the 3 x 3 x 3 walk wrapped in y, the paddle's prescribed motion in
-#: 3-D, the Shepard filter, Monaghan 2007); and the tutorial selections the device supports
+#: and the pairs wrapped in x, the sliding wall); two 3-D ones, the cut solitaryWave3D
+#: above (always, about 30 s: the 3 x 3 x 3 walk wrapped in y, the paddle's prescribed
+#: motion in 3-D, the Shepard filter, Monaghan 2007) and the periodic cube (always, about
+#: 15 s: the walk wrapped in z too); and the tutorial selections the device supports
 #: that they do not cover (with SPHFOAM_SLOW_TESTS=1): damBreak (quartic, symmetric,
 #: artificial viscosity, Monaghan 2007; about 90 s), solitaryWave (laminar, Shepard filter,
 #: the paddle's prescribed motion; about 90 s), damBreak3D (wendlandC2, the delta-SPH
@@ -51,6 +59,7 @@ _SLOW = pytest.mark.skipif(os.environ.get("SPHFOAM_SLOW_TESTS") != "1",
 CASES = [("damBreakMatched", 0.1, 5, {}),
          ("couette", 0.0035 / 11, 3, {}),
          ("solitaryWave3D", 0.05, 2, _SOLITARY_3D),
+         ("damBreakMatched3D", 0.1, 2, _CUBE_3D),
          pytest.param("damBreak", 0.02, 5, {}, marks=_SLOW),
          pytest.param("solitaryWave", 0.125, 3, {}, marks=_SLOW),
          pytest.param("damBreak3D", 0.2, 3, {}, marks=_SLOW)]
