@@ -3,10 +3,10 @@
 Each comparison runs in a subprocess with ``NUMBA_ENABLE_CUDASIM=1`` (it must be set before
 numba.cuda is imported; the rest of the suite keeps the real numba.cuda): a tiny case, a few
 steps on each backend (the CPU one gathering over full lists, as the device does), then x,
-y, u, v, rho (z, w in 3-D) by particle id. The same neighbour lists in the same order, the same sums in
-the same order: what differs is round-off, from the CPU's fastmath contraction and
-reassociation (the simulator evaluates the kernels' Python in plain double arithmetic; on a
-device, fused multiply-adds), so the fields agree to ``RTOL`` relative to each field's
+y, u, v, rho (z, w in 3-D) by particle id. The same neighbour lists in the same order, the
+same sums in the same order: what differs is round-off, from the CPU's fastmath contraction
+and reassociation (the simulator evaluates the kernels' Python in plain double arithmetic;
+on a device, fused multiply-adds), so the fields agree to ``RTOL`` relative to each field's
 largest magnitude (a velocity or position component: its vector's largest component), and
 the times reached exactly or to round-off.
 """
