@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 
 from sphfoam.engine.generated import load_generated
-from sphfoam.engine.plan import Selection, missing_dimension
+from sphfoam.engine.plan import Selection, core_parameters, missing_dimension
 
 #: the core coefficients every pipeline reads first (the same slots as the CPU's; "gz" too
 #: in 3-D)
@@ -52,20 +52,15 @@ def check_supported(sel: Selection, motions=None) -> None:
 
 
 def parameters(sel: Selection, ctx, domain_lo, domain_hi) -> dict[str, float]:
-    """The coefficient vector by name: h, 1/h, support^2, eta^2, gravity (per component),
-    the periods, then the models' own (each under its prefix)."""
+    """The coefficient vector by name: the core (:func:`~sphfoam.engine.plan.core_parameters`:
+    h, 1/h, support^2, eta^2, gravity per component, the periods), half the periods, then
+    the models' own (each under its prefix)."""
     if getattr(ctx, "dim", sel.dim) != sel.dim:
         # the models' coefficients (the kernel's alpha_d / h^d) in the selection's dimension
         ctx = dataclasses.replace(ctx, dim=sel.dim)
-    h = ctx.h
-    support = ctx.support or sel.kernel.support_radius(h)
-    params = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=ctx.eta2,
-                  gx=ctx.g[0], gy=ctx.g[1])
-    if sel.dim == 3:
-        params["gz"] = ctx.g[2] if len(ctx.g) > 2 else 0.0
-    for i, axis in enumerate("xyz"[:sel.dim]):
+    params = core_parameters(sel, ctx, domain_lo, domain_hi)
+    for axis in "xyz"[:sel.dim]:
         if sel.periodic(axis):
-            params[f"l{axis}"] = float(domain_hi[i] - domain_lo[i])
             params[f"half_l{axis}"] = 0.5 * params[f"l{axis}"]
     for mdl in sel.models():
         for k, val in mdl.params(ctx).items():
