@@ -7,7 +7,7 @@ y, u, v, rho (z, w in 3-D) by particle id. The same neighbour lists in the same 
 same sums in the same order: what differs is round-off, from the CPU's fastmath contraction
 and reassociation (the simulator evaluates the kernels' Python in plain double arithmetic;
 on a device, fused multiply-adds), so the fields agree to ``RTOL`` relative to each field's
-largest magnitude (a velocity or position component: its vector's largest component), and
+largest magnitude (a velocity component: the velocity's largest component), and
 the times reached exactly or to round-off.
 """
 
@@ -24,7 +24,7 @@ import pytest
 pytest.importorskip("numba.cuda")
 
 ROOT = Path(__file__).resolve().parent.parent
-#: relative to each field's (each vector's) largest magnitude, after the steps below
+#: relative to each field's (the velocity's) largest magnitude, after the steps below
 RTOL = 1e-9
 
 #: solitaryWave3D cut to a flume 0.35 m long, 0.25 m high and one period (0.55 m) across,
