@@ -27,35 +27,38 @@ ROOT = Path(__file__).resolve().parent.parent
 #: relative to each field's (the velocity's) largest magnitude, after the steps below
 RTOL = 1e-9
 
-#: solitaryWave3D cut to a flume 0.35 m long, 0.25 m high and one period (0.55 m) across,
-#: with the density filter every step: a few hundred particles
+#: solitaryWave3D cut to a flume 0.35 m long, 0.2 m high and one period (0.55 m) across,
+#: two layers of wall particles, the density filter every step: about 600 particles
 _SOLITARY_3D = {"system/particleDict:fluid.water.max": [0.2, 0.55, 0.2],
                 "system/particleDict:walls.flume.min": [-0.15, 0, 0],
-                "system/particleDict:walls.flume.max": [0.2, 0.55, 0.25],
-                "system/particleDict:walls.paddle.max": [0, 0.55, 0.25],
+                "system/particleDict:walls.flume.max": [0.2, 0.55, 0.2],
+                "system/particleDict:walls.flume.layers": 2,
+                "system/particleDict:walls.paddle.max": [0, 0.55, 0.2],
+                "system/particleDict:walls.paddle.layers": 2,
                 "system/particleDict:domain.min": [-0.4, 0, -0.3],
                 "system/particleDict:domain.max": [0.5, 0.55, 0.5],
                 "constant/sphProperties:densityFilter.every": 1}
 
 #: damBreakMatched3D cut to a cube of fluid 9 dx a side at dx = 0.1, no walls, periodic in
-#: x, y and z (3 cells each): every particle's walk wraps in some axis
+#: x, y and z (3 cells each): the walk of every particle outside the central cell wraps
 _CUBE_3D = {"system/particleDict:walls": None,
             "system/particleDict:fluid.column.max": [0.9, 0.9, 0.9],
             "system/particleDict:domain": {"min": [0, 0, 0], "max": [0.9, 0.9, 0.9],
                                            "periodic": ["x", "y", "z"]}}
 
-#: (case, dx, steps, edits): the matched case (always, about 80 s on the simulator); a
+#: (case, dx, steps, edits): the matched case (always, about 25 s on the simulator); a
 #: periodic one, couette at 11 columns across its period (always, about 20 s: the cell walk
 #: and the pairs wrapped in x, the sliding wall); two 3-D ones, the cut solitaryWave3D
-#: above (always, about 30 s: the 3 x 3 x 3 walk wrapped in y, the paddle's prescribed
-#: motion in 3-D, the Shepard filter, Monaghan 2007) and the periodic cube (always, about
-#: 15 s: the walk wrapped in z too); and the tutorial selections the device supports
-#: that they do not cover (with SPHFOAM_SLOW_TESTS=1): damBreak (quartic, symmetric,
-#: artificial viscosity, Monaghan 2007; about 90 s), solitaryWave (laminar, Shepard filter,
-#: the paddle's prescribed motion; about 90 s), damBreak3D (wendlandC2, the delta-SPH
-#: filter of Fourtakas, the symplectic integrator, a block in the tank; about 40 s)
+#: above (always, about 25 s: the 3 x 3 x 3 walk wrapped in y, the paddle's prescribed
+#: motion in 3-D, the Shepard filter before the second step, Monaghan 2007) and the
+#: periodic cube (always, about 15 s: the walk wrapped in z too); and the tutorial
+#: selections the device supports that they do not cover (with SPHFOAM_SLOW_TESTS=1):
+#: damBreak (quartic, symmetric, artificial viscosity, Monaghan 2007; about 40 s),
+#: solitaryWave (laminar, Shepard filter, the paddle's prescribed motion; about 45 s),
+#: damBreak3D (wendlandC2, the delta-SPH filter of Fourtakas, the symplectic integrator,
+#: a block in the tank; about 35 s)
 _SLOW = pytest.mark.skipif(os.environ.get("SPHFOAM_SLOW_TESTS") != "1",
-                           reason="the CUDA simulator, 90 s: set SPHFOAM_SLOW_TESTS=1")
+                           reason="the CUDA simulator, 40 s: set SPHFOAM_SLOW_TESTS=1")
 CASES = [("damBreakMatched", 0.1, 5, {}),
          ("couette", 0.0035 / 11, 3, {}),
          ("solitaryWave3D", 0.05, 2, _SOLITARY_3D),
