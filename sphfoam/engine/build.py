@@ -18,24 +18,7 @@ import numpy as np
 from sphfoam.engine.generated import load_generated
 from sphfoam.engine.emit_cpu import generate_source, generate_updates
 from sphfoam.engine.pipeline import Pipeline, core_param_names
-from sphfoam.engine.plan import Selection
-
-
-def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0, 0.0),
-                    domain_hi=(1.0, 1.0, 1.0)) -> dict:
-    """h, 1/h, the squared support radius, the eta^2 guard of T(3.32), gravity and, for periodic
-    axes, the periods: the single source of these for the pipeline, set-up, sampling and
-    benchmarks (all from the selected kernel and the case context)."""
-    h = ctx.h
-    support = ctx.support or sel.kernel.support_radius(h)   # the case context's, if set
-    core = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=ctx.eta2,
-                gx=ctx.g[0], gy=ctx.g[1])
-    if sel.dim == 3:
-        core["gz"] = ctx.g[2] if len(ctx.g) > 2 else 0.0
-    for i, axis in enumerate("xyz"[:sel.dim]):
-        if sel.periodic(axis):
-            core[f"l{axis}"] = float(domain_hi[i] - domain_lo[i])
-    return core
+from sphfoam.engine.plan import Selection, core_parameters
 
 
 def build_pipeline(sel: Selection, ctx, core: dict[str, float] | None = None, *,

@@ -108,6 +108,23 @@ HOOKS = ("attach", "before_neighbours", "add_particles", "after_sort", "before_e
          "advection_velocity")
 
 
+def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0, 0.0),
+                    domain_hi=(1.0, 1.0, 1.0)) -> dict:
+    """h, 1/h, the squared support radius, the eta^2 guard of T(3.32), gravity and, for periodic
+    axes, the periods: the single source of these for the pipeline, set-up, sampling and
+    benchmarks (all from the selected kernel and the case context)."""
+    h = ctx.h
+    support = ctx.support or sel.kernel.support_radius(h)   # the case context's, if set
+    core = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=ctx.eta2,
+                gx=ctx.g[0], gy=ctx.g[1])
+    if sel.dim == 3:
+        core["gz"] = ctx.g[2] if len(ctx.g) > 2 else 0.0
+    for i, axis in enumerate("xyz"[:sel.dim]):
+        if sel.periodic(axis):
+            core[f"l{axis}"] = float(domain_hi[i] - domain_lo[i])
+    return core
+
+
 def missing_dimension(model, dim: int) -> str | None:
     """Why ``model`` cannot run in ``dim`` dimensions, naming it (None when it can): a term
     with no code for ``dim``, or run-time hooks written for two dimensions only."""

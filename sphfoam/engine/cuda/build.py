@@ -4,12 +4,15 @@ compiles each kernel at its first launch."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from sphfoam.engine.generated import load_generated
-from sphfoam.engine.plan import Selection
+from sphfoam.engine.plan import Selection, core_parameters, missing_dimension
 
-#: the core coefficients every pipeline reads first (the same slots as the CPU's)
+#: the core coefficients every pipeline reads first (the same slots as the CPU's; "gz" too
+#: in 3-D)
 CORE = ("h", "inv_h", "support2", "eta2", "gx", "gy")
 
 #: the run-time hooks (``sphfoam.models.base.HOOK_NAMES``): Python between stages on host
@@ -26,13 +29,18 @@ class Unsupported(ValueError):
 def refusals(sel: Selection, motions=None) -> list[str]:
     """What of ``sel`` the CUDA backend has no form of, each named ("family name: why")."""
     out = []
-    if sel.dim != 2:
-        out.append("3-D cases: the CUDA backend runs two dimensions")
     for m in sel.models():
+        why = missing_dimension(m, sel.dim)
+        if why is not None:
+            out.append(why)
+            continue
         hooks = [h for h in _HOOKS if m.implements(h)]
         if hooks:
             out.append(f"{m.family} {m.name!r}: its run-time hooks ({', '.join(hooks)}) run "
                        "on host arrays")
+    for m in (motions or {}).values():
+        if sel.dim not in getattr(m, "dims", (2,)):
+            out.append(f"motion {m.name!r}: no {sel.dim}-D form")
     return out
 
 
@@ -44,15 +52,15 @@ def check_supported(sel: Selection, motions=None) -> None:
 
 
 def parameters(sel: Selection, ctx, domain_lo, domain_hi) -> dict[str, float]:
-    """The coefficient vector by name: h, 1/h, support^2, eta^2, gravity, the periods, then
+    """The coefficient vector by name: the core (:func:`~sphfoam.engine.plan.core_parameters`:
+    h, 1/h, support^2, eta^2, gravity per component, the periods), half the periods, then
     the models' own (each under its prefix)."""
-    h = ctx.h
-    support = ctx.support or sel.kernel.support_radius(h)
-    params = dict(h=h, inv_h=1.0 / h, support2=support * support, eta2=ctx.eta2,
-                  gx=ctx.g[0], gy=ctx.g[1])
-    for i, axis in enumerate("xy"):
+    if getattr(ctx, "dim", sel.dim) != sel.dim:
+        # the models' coefficients (the kernel's alpha_d / h^d) in the selection's dimension
+        ctx = dataclasses.replace(ctx, dim=sel.dim)
+    params = core_parameters(sel, ctx, domain_lo, domain_hi)
+    for axis in "xyz"[:sel.dim]:
         if sel.periodic(axis):
-            params[f"l{axis}"] = float(domain_hi[i] - domain_lo[i])
             params[f"half_l{axis}"] = 0.5 * params[f"l{axis}"]
     for mdl in sel.models():
         for k, val in mdl.params(ctx).items():

@@ -1,6 +1,7 @@
 """Device functions and the fixed kernels of the CUDA backend: the models' helpers as device
 functions, the cell list (binning, a deterministic counting sort), the exclusive scan, the
-permutation of the state and the reductions of the time step and the list's check.
+permutation of the state and the reductions of the time step and the list's check. One
+form serves both dimensions: the kernels over positions take the third axis and ``three``.
 
 Imported only once numba.cuda can run (:func:`sphfoam.engine.cuda.cuda_module`).
 """
@@ -43,24 +44,51 @@ def blocks(n: int) -> int:
 
 
 # --- the cell list ----------------------------------------------------------------------------
+@cuda.jit(device=True)
+def wrap(x, x0, lx):
+    """x wrapped into [x0, x0 + lx) along a periodic axis (``lx`` > 0), else x."""
+    if lx > 0.0:
+        return x0 + (x - x0) % lx
+    return x
+
+
+@cuda.jit(device=True)
+def nearest_image(dx, lx):
+    """dx to the nearest image along a periodic axis (``lx`` > 0), else dx."""
+    if lx > 0.0:
+        if dx > 0.5 * lx:
+            return dx - lx
+        if dx < -0.5 * lx:
+            return dx + lx
+    return dx
+
+
 @cuda.jit
-def bin_particles(x, y, x0, y0, inv_cell, ncx, ncy, lx, ly, cell, counts):
-    """Cell of particle a (wrapped into the box along periodic axes, ``lx``/``ly`` > 0);
-    outside the box (or not finite): the extra last cell ``ncx ncy``, sorted after all
-    others. ``counts`` per cell, by atomics (a count: independent of the order)."""
+def bin_particles(x, y, z, x0, y0, z0, inv_cell, ncx, ncy, ncz, lx, ly, lz, three, cell,
+                  counts):
+    """Cell (iz ncy + iy) ncx + ix of particle a (wrapped into the box along periodic axes,
+    ``lx``/``ly``/``lz`` > 0); outside the box (or not finite): the extra last cell ``ncx ncy
+    ncz``, sorted after all others. ``three``: a third axis (else ``z`` is not read, iz = 0,
+    ncz = 1). ``counts`` per cell, by atomics (a count: independent of the order)."""
     a = cuda.grid(1)
     if a >= x.shape[0]:
         return
-    if lx > 0.0:
-        x[a] = x0 + (x[a] - x0) % lx
-    if ly > 0.0:
-        y[a] = y0 + (y[a] - y0) % ly
+    x[a] = wrap(x[a], x0, lx)
+    y[a] = wrap(y[a], y0, ly)
     fx = (x[a] - x0) * inv_cell
     fy = (y[a] - y0) * inv_cell
-    if fx >= 0.0 and fx < ncx and fy >= 0.0 and fy < ncy:
-        c = int(fy) * ncx + int(fx)
+    inside = fx >= 0.0 and fx < ncx and fy >= 0.0 and fy < ncy
+    iz = 0
+    if three:
+        z[a] = wrap(z[a], z0, lz)
+        fz = (z[a] - z0) * inv_cell
+        inside = inside and fz >= 0.0 and fz < ncz
+        if inside:
+            iz = int(fz)
+    if inside:
+        c = (iz * ncy + int(fy)) * ncx + int(fx)
     else:
-        c = ncx * ncy
+        c = ncx * ncy * ncz
     cell[a] = c
     cuda.atomic.add(counts, c, 1)
 
@@ -172,9 +200,10 @@ def permute_rows(src, order, dst):
 
 # --- reductions (min and max are exact: the result does not depend on the order) -----------
 @cuda.jit
-def time_step_reduce(h, c, sigma, ax, ay, kind, out):
+def time_step_reduce(h, c, sigma, ax, ay, az, three, kind, out):
     """out[0] = min over fluid particles of h / (c_a + sigma_a), T(3.89); out[1] = max of
-    |F_a|^2 for T(3.90). Per block in shared memory, then one atomic per block."""
+    |F_a|^2 for T(3.90) (with ``az`` where ``three``). Per block in shared memory, then one
+    atomic per block."""
     smin = cuda.shared.array(128, dtype=np.float64)
     smax = cuda.shared.array(128, dtype=np.float64)
     a = cuda.grid(1)
@@ -184,6 +213,8 @@ def time_step_reduce(h, c, sigma, ax, ay, kind, out):
     if a < c.shape[0] and kind[a] == 0:
         dmin = h / (c[a] + sigma[a])
         fmax = ax[a] * ax[a] + ay[a] * ay[a]
+        if three:
+            fmax += az[a] * az[a]
     smin[t] = dmin
     smax[t] = fmax
     cuda.syncthreads()
@@ -200,10 +231,12 @@ def time_step_reduce(h, c, sigma, ax, ay, kind, out):
 
 
 @cuda.jit
-def displacement_reduce(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly, out):
-    """out[0] = max displacement^2 since (xr, yr) (nearest image on periodic axes), out[1]
-    = max speed^2, out[2] = 1 if a particle is outside the box or not finite (a NaN counts
-    as an infinite displacement)."""
+def displacement_reduce(x, y, z, xr, yr, zr, u, v, w, x0, y0, z0, x1, y1, z1, lx, ly, lz,
+                        three, out):
+    """out[0] = max displacement^2 since (xr, yr, zr) (nearest image on periodic axes),
+    out[1] = max speed^2, out[2] = 1 if a particle is outside the box [x0, x1) x [y0, y1)
+    (x [z0, z1)) or not finite (a NaN counts as an infinite displacement). ``three``: a
+    third axis (else ``z``, ``zr``, ``w`` are not read)."""
     sd = cuda.shared.array(128, dtype=np.float64)
     sv = cuda.shared.array(128, dtype=np.float64)
     a = cuda.grid(1)
@@ -211,28 +244,21 @@ def displacement_reduce(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly, out):
     d2 = 0.0
     v2 = 0.0
     if a < x.shape[0]:
-        xa = x[a]
-        ya = y[a]
-        if lx > 0.0:
-            xa = x0 + (xa - x0) % lx
-        if ly > 0.0:
-            ya = y0 + (ya - y0) % ly
-        if not (xa >= x0 and xa < x1 and ya >= y0 and ya < y1):
-            out[2] = 1.0
-        dx = xa - xr[a]
-        dy = ya - yr[a]
-        if lx > 0.0:
-            if dx > 0.5 * lx:
-                dx -= lx
-            elif dx < -0.5 * lx:
-                dx += lx
-        if ly > 0.0:
-            if dy > 0.5 * ly:
-                dy -= ly
-            elif dy < -0.5 * ly:
-                dy += ly
+        xa = wrap(x[a], x0, lx)
+        ya = wrap(y[a], y0, ly)
+        inside = xa >= x0 and xa < x1 and ya >= y0 and ya < y1
+        dx = nearest_image(xa - xr[a], lx)
+        dy = nearest_image(ya - yr[a], ly)
         d2 = dx * dx + dy * dy
         v2 = float(u[a]) * float(u[a]) + float(v[a]) * float(v[a])
+        if three:
+            za = wrap(z[a], z0, lz)
+            inside = inside and za >= z0 and za < z1
+            dz = nearest_image(za - zr[a], lz)
+            d2 += dz * dz
+            v2 += float(w[a]) * float(w[a])
+        if not inside:
+            out[2] = 1.0
         if not (d2 >= 0.0):
             d2 = math.inf
         if not (v2 >= 0.0):
@@ -253,8 +279,10 @@ def displacement_reduce(x, y, xr, yr, u, v, x0, y0, x1, y1, lx, ly, out):
 
 
 @cuda.jit
-def prescribe_patch(x, y, u, v, patch, x0, y0, which, ox, oy, uu, vv):
-    """Particles of wall entry ``which``: r = r0 + d(t), v = d'(t)."""
+def prescribe_patch(x, y, z, u, v, w, patch, x0, y0, z0, which, ox, oy, oz, uu, vv, ww,
+                    three):
+    """Particles of wall entry ``which``: r = r0 + d(t), v = d'(t) (z, w where ``three``;
+    else ``z``, ``w``, ``z0`` are not read)."""
     a = cuda.grid(1)
     if a >= x.shape[0]:
         return
@@ -263,6 +291,9 @@ def prescribe_patch(x, y, u, v, patch, x0, y0, which, ox, oy, uu, vv):
         y[a] = y0[a] + oy
         u[a] = uu
         v[a] = vv
+        if three:
+            z[a] = z0[a] + oz
+            w[a] = ww
 
 
 # --- the health checks (sphfoam.engine.health.scan on the device) ---------------------------

@@ -6,8 +6,8 @@ do not depend on the scheduling) go into one kernel per stage, one thread per pa
 (``a = cuda.grid(1)``). The models' helper functions (their ``imports()`` lines, plain
 jitted scalar functions) are compiled as device functions
 (:func:`sphfoam.engine.cuda.device.device_function`). The cell walk that counts and fills
-the neighbour list visits the cells by row and the particles by cell, as the CPU's does:
-the same lists in the same order. The integrators' particle updates
+the neighbour list visits the cells by row (rows by layer in 3-D) and the particles by cell,
+as the CPU's does: the same lists in the same order. The integrators' particle updates
 (:mod:`sphfoam.engine.stepping`) become kernels the same way (:func:`generate_updates`).
 """
 
@@ -34,28 +34,30 @@ _HEAD = """\
 
 
 def _walk(sel: Selection, body: str) -> str:
-    """The 3 x 3 cell walk around ``a`` (cells by row, particles by cell: the CPU's order),
-    ``body`` for each b within ``reach2`` (b != a; where ``skip``, no pair of two non-fluid
-    particles). Periodic axes wrap the cell index and the pair's relative position."""
-    out = ["ix = min(max(int((xa - x0) * inv_cell), 0), ncx - 1)",
-           "iy = min(max(int((ya - y0) * inv_cell), 0), ncy - 1)"]
+    """The 3 x 3 (x 3) cell walk around ``a`` (cells by row, rows by layer, particles by
+    cell: the CPU's order, cells numbered (cz ncy + cy) ncx + cx), ``body`` for each b
+    within ``reach2`` (b != a; where ``skip``, no pair of two non-fluid particles).
+    Periodic axes wrap the cell index and the pair's relative position."""
+    axes = [ax for ax, _ in components(sel.dim)]
+    out = [f"i{ax} = min(max(int(({ax}a - {ax}0) * inv_cell), 0), nc{ax} - 1)" for ax in axes]
     ind = ""
-    for ax, i, n in (("y", "iy", "ncy"), ("x", "ix", "ncx")):
+    for ax in reversed(axes):
+        i, n = f"i{ax}", f"nc{ax}"
         if sel.periodic(ax):
             out.append(f"{ind}for c{ax}0 in range({i} - 1, {i} + 2):")
             out.append(f"{ind}    c{ax} = c{ax}0 % {n}")
         else:
             out.append(f"{ind}for c{ax} in range(max({i} - 1, 0), min({i} + 2, {n})):")
         ind += "    "
-    out.append(f"{ind}cc = cy * ncx + cx")
+    out.append(f"{ind}cc = {'(cz * ncy + cy)' if sel.dim == 3 else 'cy'} * ncx + cx")
     out.append(f"{ind}for b in range(cell_start[cc], cell_start[cc + 1]):")
     ind += "    "
-    for ax in ("x", "y"):
+    for ax in axes:
         out.append(f"{ind}d{ax}_ab = {ax}a - {ax}[b]")
         if sel.periodic(ax):
             out += [f"{ind}if d{ax}_ab > 0.5 * l{ax}:", f"{ind}    d{ax}_ab -= l{ax}",
                     f"{ind}elif d{ax}_ab < -0.5 * l{ax}:", f"{ind}    d{ax}_ab += l{ax}"]
-    out.append(f"{ind}r2 = dx_ab * dx_ab + dy_ab * dy_ab")
+    out.append(f"{ind}r2 = " + " + ".join(f"d{ax}_ab * d{ax}_ab" for ax in axes))
     out.append(f"{ind}if r2 >= reach2 or b == a or not (fluid_a or kind[b] == FLUID):")
     out.append(f"{ind}    continue")
     out.append(_block(body, len(ind)))
@@ -84,7 +86,7 @@ def helper_lines(imports) -> tuple[str, set[str]]:
 
 
 def generate_source(sel: Selection, param_names: list[str]) -> str:
-    """Python source of the CUDA pipeline module for ``sel`` (2-D)."""
+    """Python source of the CUDA pipeline module for ``sel`` (2-D or 3-D)."""
     plan = Plan(sel)
     asm = LoopBodies(plan, precision=sel.precision)
     dim = sel.dim
@@ -94,6 +96,11 @@ def generate_source(sel: Selection, param_names: list[str]) -> str:
     cache = plan.cache
     ARGS = _args(dim, bool(cache))
     PLOAD = particle_load(dim)
+    X = ", ".join(ax for ax, _ in components(dim))
+    #: the cell grid (``CellList.grid``): origin, 1/side, counts per axis
+    GRID = ", ".join([f"{ax}0" for ax in X.split(", ")] + ["inv_cell"]
+                     + [f"nc{ax}" for ax in X.split(", ")])
+    LOAD_X = expand("@a = @[a]", dim)
     consts = "\n".join([f"I_{a} = {i}" for i, a in enumerate(plan.aux)]
                        + [f"F_{a} = {i}" for i, a in enumerate(plan.fields)]
                        + [f"J_{a} = {i}" for i, a in enumerate(cache)])
@@ -147,12 +154,10 @@ def equation_of_state(rho, p, c, prm):
 
 
 @cuda.jit
-def count_neighbours(x, y, kind, skip, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2,
-                     count):
+def count_neighbours({X}, kind, skip, cell_start, {GRID}, prm, reach2, count):
     """Neighbours of particle a within sqrt(reach2) (the cell side), from the cells."""
 {_HEAD.replace("kind.shape", "x.shape")}{_block(bind, 4)}
-    xa = x[a]
-    ya = y[a]
+{_block(LOAD_X, 4)}
     fluid_a = (not skip) or kind[a] == FLUID
     n_a = 0
 {_block(_walk(sel, "n_a += 1"), 4)}
@@ -160,13 +165,11 @@ def count_neighbours(x, y, kind, skip, cell_start, x0, y0, inv_cell, ncx, ncy, p
 
 
 @cuda.jit
-def fill_neighbours(x, y, kind, skip, cell_start, x0, y0, inv_cell, ncx, ncy, prm, reach2,
-                    nb_start, nb_idx):
+def fill_neighbours({X}, kind, skip, cell_start, {GRID}, prm, reach2, nb_start, nb_idx):
     """The neighbour list of a, nb_idx[nb_start[a]:nb_start[a + 1]], in the order of the
     cell walk (the CPU's order)."""
 {_HEAD.replace("kind.shape", "x.shape")}{_block(bind, 4)}
-    xa = x[a]
-    ya = y[a]
+{_block(LOAD_X, 4)}
     fluid_a = (not skip) or kind[a] == FLUID
     k = nb_start[a]
 {_block(_walk(sel, "nb_idx[k] = b" + chr(10) + "k += 1"), 4)}

@@ -16,6 +16,7 @@ import time as _time
 import numpy as np
 
 from sphfoam.engine.cuda import cuda_module
+from sphfoam.engine.bodies import components as components_of
 from sphfoam.engine.neighbours import CellList
 from sphfoam.engine.state import FLUID, ParticleState
 from sphfoam.engine.stepping import StepContext, advance, components, field_components
@@ -23,10 +24,15 @@ from sphfoam.engine.stepping import StepContext, advance, components, field_comp
 #: the health monitor's last good state is kept on the device every this many passing steps
 SNAPSHOT_EVERY = 10
 
-_STATE_F8 = ("x", "y")
-_STATE_W = ("u", "v", "rho", "m")
 _STATE_I8 = ("kind", "id")
-_SCRATCH = ("p", "c", "ax", "ay", "drho", "sigma")
+
+
+def _state_arrays(dim: int):
+    """The device state's arrays in ``dim`` dimensions: (positions, float64), (velocities,
+    density, mass: the working precision), (scratch: rewritten each evaluation)."""
+    axes = [ax for ax, _ in components_of(dim)]
+    return (tuple(axes), (*(vel for _, vel in components_of(dim)), "rho", "m"),
+            ("p", "c", *(f"a{ax}" for ax in axes), "drho", "sigma"))
 
 
 class _DeviceExtra(dict):
@@ -84,7 +90,7 @@ class DeviceSnapshot:
     @classmethod
     def of(cls, sim, kept: "DeviceSnapshot | None") -> "DeviceSnapshot":
         snap = kept if kept is not None else cls()
-        src = {k: a for k, a in sim.d.items() if k not in _SCRATCH}
+        src = {k: a for k, a in sim.d.items() if k not in sim._scratch}
         src.update({f"extra.{k}": a for k, a in sim.d_extra.items()})
         src["fld"] = sim.d_fld
         for k, a in src.items():
@@ -131,6 +137,13 @@ class CudaSimulation:
         self.module = pipeline.module
         sel = pipeline.selection
         self.selection = sel
+        if state.dim != sel.dim:
+            raise ValueError(f"a {state.dim}-D state and a {sel.dim}-D pipeline")
+        self.dim = sel.dim
+        self._f8, self._working, self._scratch = _state_arrays(self.dim)
+        #: the state's arrays an integrator's updates read or write as they are
+        self._updated = {*self._f8, *self._working[:self.dim], "rho", "drho", "kind",
+                         *(f"a{ax}" for ax in self._f8)}
         self.dtype = sel.dtype
         self.integrator = integrator
         self.h = pipeline.h
@@ -144,7 +157,7 @@ class CudaSimulation:
         if cell_size_factor < 1.0:
             raise ValueError("cellSizeFactor must be >= 1")
         self.cells = CellList(domain_lo, domain_hi, reach * cell_size_factor,
-                              sel.periodic_x, sel.periodic_y)
+                              sel.periodic_x, sel.periodic_y, sel.periodic_z)
         self.skin = self.cells.cell_size - reach
         schedules = [m.schedule() for m in sel.models() if m.schedule() is not None]
         self.filter_schedule = (schedules[0] if schedules and
@@ -165,7 +178,6 @@ class CudaSimulation:
         #: seconds per stage when ``timers`` is set (synchronised: for benchmarks only)
         self.timers = None
         self._host = state
-        self.dim = state.dim
         self._upload(state)
         self.prm = pipeline.prm
         self.d_prm = self.cuda.to_device(pipeline.prm)
@@ -196,13 +208,13 @@ class CudaSimulation:
     def _upload(self, st: ParticleState):
         self.n = st.n
         self.d = {}
-        for k in _STATE_F8:
+        for k in self._f8:
             self.d[k] = self._to(getattr(st, k), np.float64)
-        for k in _STATE_W:
+        for k in self._working:
             self.d[k] = self._to(getattr(st, k), self.dtype)
         for k in _STATE_I8:
             self.d[k] = self._to(getattr(st, k), np.int64)
-        for k in _SCRATCH:
+        for k in self._scratch:
             self.d[k] = self.cuda.device_array(self.n, dtype=self.dtype)
         self.d_extra = _DeviceExtra(self.cuda)
         fields = self.module.FIELDS
@@ -249,11 +261,13 @@ class CudaSimulation:
             fld = self._get(self.d_fld)
             for i, k in enumerate(self.module.FIELDS):
                 extra[k] = fld[i]
+            third = dict(z=self._get(d["z"]), w=self._get(d["w"])) if self.dim == 3 else {}
             st = ParticleState(*(self._get(d[k]) for k in ("x", "y", "u", "v", "rho", "m",
-                                                           "kind", "id")), extra=extra)
+                                                           "kind", "id")), extra=extra,
+                               **third)
             if self.dtype != np.float64:
                 st.set_precision(self.dtype)
-            for k in _SCRATCH:
+            for k in self._scratch:
                 setattr(st, k, self._get(d[k]))
             self._host = st
             self._dirty = False
@@ -269,12 +283,15 @@ class CudaSimulation:
     def invalidate_neighbours(self):
         self._ref = None
 
-    energy_unit = "J/m"
+    @property
+    def energy_unit(self) -> str:
+        """J per metre of span in 2-D, J in 3-D (the mass is per unit span in 2-D)."""
+        return "J/m" if self.dim == 2 else "J"
 
     def kinetic_energy(self) -> float:
         st = self.state
         f = st.kind == FLUID
-        return float(0.5 * np.sum(st.m[f] * (st.u[f] ** 2 + st.v[f] ** 2)))
+        return float(0.5 * np.sum(st.m[f] * sum(c[f] ** 2 for c in st.velocities)))
 
     @property
     def filter_every(self) -> int:
@@ -294,6 +311,12 @@ class CudaSimulation:
     def _launch(self, kernel, n, *args):
         kernel[self.D.blocks(n), self.D.THREADS](*args)
 
+    def _third(self, *names):
+        """The device arrays ``names`` of the third axis, and whether there is one: in 2-D,
+        ``x`` in their place (the kernels read them only where ``three``)."""
+        three = self.dim == 3
+        return (*(self.d[k] if three else self.d["x"] for k in names), three)
+
     # --- the neighbour list -----------------------------------------------------------------
     def _list_still_valid(self) -> bool:
         ref = self._ref
@@ -302,9 +325,12 @@ class CudaSimulation:
         cl = self.cells
         self._put(self._red, self._RED_CHECK)
         d = self.d
-        self._launch(self.D.displacement_reduce, self.n, d["x"], d["y"], ref[0], ref[1],
-                     d["u"], d["v"], cl.x0, cl.y0, cl.x0 + cl.ncx * cl.cell_size,
-                     cl.y0 + cl.ncy * cl.cell_size, cl.lx, cl.ly, self._red)
+        z, w, three = self._third("z", "w")
+        zr = ref[2] if three else ref[0]
+        self._launch(self.D.displacement_reduce, self.n, d["x"], d["y"], z, ref[0], ref[1],
+                     zr, d["u"], d["v"], w, cl.x0, cl.y0, cl.z0,
+                     cl.x0 + cl.ncx * cl.cell_size, cl.y0 + cl.ncy * cl.cell_size,
+                     cl.z0 + cl.ncz * cl.cell_size, cl.lx, cl.ly, cl.lz, three, self._red)
         d2, v2, out = self._get(self._red)
         if out:
             return False
@@ -322,11 +348,13 @@ class CudaSimulation:
             return
         cu, D, cl, d = self.cuda, self.D, self.cells, self.d
         n = self.n
-        ncells = cl.ncx * cl.ncy
+        ncells = cl.ncells
         cell = cu.device_array(n, dtype=np.int64)
         counts = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
-        self._launch(D.bin_particles, n, d["x"], d["y"], cl.x0, cl.y0, 1.0 / cl.cell_size,
-                     cl.ncx, cl.ncy, cl.lx, cl.ly, cell, counts)
+        z, three = self._third("z")
+        self._launch(D.bin_particles, n, d["x"], d["y"], z, cl.x0, cl.y0, cl.z0,
+                     1.0 / cl.cell_size, cl.ncx, cl.ncy, cl.ncz, cl.lx, cl.ly, cl.lz, three,
+                     cell, counts)
         start = cu.device_array(ncells + 2, dtype=np.int64)
         self._scan_scratch = D.exclusive_scan(counts, start, self._scan_scratch)
         fill = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
@@ -335,7 +363,7 @@ class CudaSimulation:
         self._launch(D.order_cells, ncells + 1, start, order)
         kept = int(self._get(start[ncells:ncells + 1])[0])   # particles inside the box
         for k in list(d):
-            if k in _SCRATCH:
+            if k in self._scratch:
                 continue
             out = cu.device_array_like(d[k])
             self._launch(D.permute, n, d[k], order, out)
@@ -353,9 +381,8 @@ class CudaSimulation:
         self.cell_start = start[:ncells + 1]
         n = self.n
         count = cu.device_array(n, dtype=np.int64)
-        grid = (d["x"], d["y"], d["kind"], bool(self.module.FLUID_PAIRS_ONLY),
-                self.cell_start, cl.x0, cl.y0, 1.0 / cl.cell_size, cl.ncx, cl.ncy,
-                self.d_prm, cl.cell_size * cl.cell_size)
+        grid = (*(d[k] for k in self._f8), d["kind"], bool(self.module.FLUID_PAIRS_ONLY),
+                self.cell_start, *cl.grid(), self.d_prm, cl.cell_size * cl.cell_size)
         self._launch(self.module.count_neighbours, n, *grid, count)
         nb_start = cu.device_array(n + 1, dtype=np.int64)
         self._scan_scratch = D.exclusive_scan(count, nb_start, self._scan_scratch)
@@ -366,11 +393,10 @@ class CudaSimulation:
         self._launch(self.module.fill_neighbours, n, *grid, nb_start, idx)
         self._nb = (nb_start, idx)
         self.pairs = total
-        xr = cu.device_array(n, dtype=np.float64)
-        yr = cu.device_array(n, dtype=np.float64)
-        xr.copy_to_device(d["x"])
-        yr.copy_to_device(d["y"])
-        self._ref = (xr, yr)
+        ref = tuple(cu.device_array(n, dtype=np.float64) for _ in self._f8)
+        for r, k in zip(ref, self._f8):
+            r.copy_to_device(d[k])
+        self._ref = ref
         self.list_built += 1
         self._dirty = True
 
@@ -380,7 +406,7 @@ class CudaSimulation:
 
         d = self.d
         ids = self._get(d["id"][kept:])
-        where = np.column_stack([self._get(d["x"][kept:]), self._get(d["y"][kept:])])
+        where = np.column_stack([self._get(d[k][kept:]) for k in self._f8])
         rem = Removal(self.time, int(ids.shape[0]), ids, where)
         self.removals.append(rem)
         if self.on_removal:
@@ -401,8 +427,9 @@ class CudaSimulation:
         if self.d_aux.shape[1] != self.n:
             self.d_aux = self.cuda.to_device(np.zeros((len(self.module.AUX), self.n),
                                                       dtype=self.dtype))
-        args = (d["x"], d["y"], d["u"], d["v"], d["rho"], d["p"], d["c"], d["m"], d["kind"],
-                nb_start, nb_idx, self.d_prm, self.d_aux, self.d_fld)
+        args = (*(d[k] for k in self._f8), *(d[vel] for _, vel in components_of(self.dim)),
+                d["rho"], d["p"], d["c"], d["m"], d["kind"], nb_start, nb_idx, self.d_prm,
+                self.d_aux, self.d_fld)
         if self.module.PAIR_CACHE:
             if self._pc is None or self._pc.shape[1] != nb_idx.shape[0]:
                 self._pc = self.cuda.device_array((len(self.module.PAIR_CACHE),
@@ -436,8 +463,8 @@ class CudaSimulation:
                 self.integrator, "time_step_from_first_evaluation", False)
             self._evaluations += 1
         d = self.d
-        self._timed("rates", self._launch, self.module.rates, self.n, *args, d["ax"], d["ay"],
-                    d["drho"], d["sigma"], sigma)
+        self._timed("rates", self._launch, self.module.rates, self.n, *args,
+                    *(d[f"a{ax}"] for ax in self._f8), d["drho"], d["sigma"], sigma)
 
     def density_rate(self):
         args = self._args()
@@ -464,8 +491,9 @@ class CudaSimulation:
             return self.delta_t
         d = self.d
         self._put(self._red, self._RED_DT)
+        az, three = self._third("az")
         self._timed("time_step", self._launch, self.D.time_step_reduce, self.n, self.h,
-                    d["c"], d["sigma"], d["ax"], d["ay"], d["kind"], self._red)
+                    d["c"], d["sigma"], d["ax"], d["ay"], az, three, d["kind"], self._red)
         dmin, fmax, _ = self._get(self._red)
         if self.force_condition and fmax > 0.0:
             dmin = min(dmin, math.sqrt(self.h / math.sqrt(fmax)))
@@ -473,7 +501,7 @@ class CudaSimulation:
 
     def advect(self):
         """No advection model has a device form yet: positions move with the velocity."""
-        self._pU = (self.d["u"], self.d["v"])
+        self._pU = tuple(self.d[vel] for _, vel in components_of(self.dim))
 
     def _extra(self, k):
         return self.d_extra[k] if k in self.d_extra else \
@@ -486,27 +514,30 @@ class CudaSimulation:
                 "patch" not in self.module.FIELDS:
             return
         d = self.d
+        z, w, three = self._third("z", "w")
+        r0 = [self._extra(f"{ax}0") for ax in self._f8]
         for which, mot in self.motions.items():
-            (ox, oy), (uu, vv) = mot.displacement(t), mot.velocity(t)
+            off = (tuple(mot.displacement(t)) + (0.0,))[:3]
+            vel = (tuple(mot.velocity(t)) + (0.0,))[:3]
             self._timed("walls", self._launch, self.D.prescribe_patch, self.n, d["x"], d["y"],
-                        d["u"], d["v"], self._extra("patch"), self._extra("x0"),
-                        self._extra("y0"), float(which), float(ox), float(oy), float(uu),
-                        float(vv))
+                        z, d["u"], d["v"], w, self._extra("patch"), r0[0], r0[1], r0[-1],
+                        float(which), *map(float, off), *map(float, vel), three)
 
     # --- the integrator's updates ---------------------------------------------------------
     def run_update(self, name: str, scalars: dict):
         if self.updates is None:
             from sphfoam.engine.cuda.build import build_updates
 
-            self.updates = build_updates(self.integrator, 2)
+            self.updates = build_updates(self.integrator, self.dim)
             self._upd = {u.name: u for u in self.integrator.updates}
             self._kept_names = {}
             for g, prec in getattr(self.integrator, "kept", {}).items():
-                for i, c in enumerate(components(g, 2)):
+                for i, c in enumerate(components(g, self.dim)):
                     self._kept_names[c] = (g, i, prec)
             self._hist = {}
             for g, tmpl in getattr(self.integrator, "history", {}).items():
-                self._hist.update(zip(components(g, 2), field_components(tmpl, 2)))
+                self._hist.update(zip(components(g, self.dim),
+                                      field_components(tmpl, self.dim)))
         upd = self._upd[name]
         args = [self._array(a) for a in self.updates.ARRAYS[name]]
         args += [scalars[s] for s in upd.scalars]
@@ -516,17 +547,15 @@ class CudaSimulation:
 
     def _array(self, a):
         d = self.d
-        names = {"x": "x", "y": "y", "u": "u", "v": "v", "rho": "rho", "drho": "drho",
-                 "kind": "kind", "ax": "ax", "ay": "ay"}
-        if a in names:
-            return d[names[a]]
+        if a in self._updated:
+            return d[a]
         if a in self._kept_names:
             g, i, prec = self._kept_names[a]
             dt = self.dtype if prec == "working" else np.float64
             buf = self._kept.get(g)
             if buf is None or buf[0].shape[0] != self.n:
                 buf = tuple(self.cuda.device_array(self.n, dtype=dt)
-                            for _ in components(g, 2))
+                            for _ in components(g, self.dim))
                 self._kept[g] = buf
             return buf[i]
         if a in self._hist:
@@ -534,7 +563,7 @@ class CudaSimulation:
             if k not in self.d_extra:
                 self.d_extra[k] = np.zeros(self.n)
             return self.d_extra[k]
-        adv = components("pU@", 2)
+        adv = components("pU@", self.dim)
         if a in adv:
             return self._pU[adv.index(a)]
         raise ValueError(f"integrator {self.integrator.name!r}: unknown array {a!r}")
