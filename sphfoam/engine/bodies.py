@@ -145,6 +145,21 @@ def neighbour_load(dim: int = 2) -> str:
     return expand(_NEIGHBOUR_LOAD.format(vdotr=sum_over("U@_ab * d@_ab", dim)), dim) + "\n"
 
 
+def cell_range(sel, axis: str, i: str, n: str, name: str):
+    """(first, end, cell) of the loop ``for <name>0 in range(first, end): <name> = cell``
+    over the cells of ``axis`` around index ``i``. Along a periodic axis the three cells
+    wrap; along one the half lists' bands do not follow (:attr:`Selection.band_axis`) they
+    are visited in increasing index, i - 1, i, i + 1 with the wrapped one moved to its
+    place, so that the list, like the walk over particles sorted by cell, holds each
+    particle's b < a before its b > a (:func:`sphfoam.engine.neighbours.half_lists`)."""
+    if not sel.periodic(axis):
+        return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
+    if axis == sel.band_axis:
+        return f"{i} - 1", f"{i} + 2", f"{name}0 % {n}"
+    turn = f"(1 if {i} == 0 else 2 if {i} == {n} - 1 else 0)"
+    return "0", "3", f"({i} - 1 + ({name}0 + {turn}) % 3) % {n}"
+
+
 class LoopBodies:
     """The code of each loop's body for one particle ``a``, from ``plan``."""
 

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from sphfoam._version import __version__
 from sphfoam.engine import generated
-from sphfoam.engine.bodies import LoopBodies, _block, _indent, components, expand, particle_load
+from sphfoam.engine.bodies import (LoopBodies, _block, _indent, cell_range, components, expand,
+                                   particle_load)
 from sphfoam.engine.fastmath import FASTMATH_SOURCE
 from sphfoam.engine.plan import Plan, Selection
 
@@ -131,27 +132,12 @@ for cz0 in range({zlo}, {zhi}):
 """
 
 
-def _axis_range(sel, axis: str, i: str, n: str, name: str):
-    """(first, end, cell) of the loop ``for <name>0 in range(first, end): <name> = cell``
-    over the cells of ``axis`` around index ``i``. Along a periodic axis the three cells
-    wrap; across the half lists' bands (:attr:`Selection.band_axis`) they are visited in
-    increasing index, i - 1, i, i + 1 with the wrapped one moved to its place, so that the
-    list, like the walk over particles sorted by cell, holds each particle's b < a before
-    its b > a (:func:`sphfoam.engine.neighbours.half_lists`)."""
-    if not sel.periodic(axis):
-        return f"max({i} - 1, 0)", f"min({i} + 2, {n})", f"{name}0"
-    if axis == sel.band_axis:
-        return f"{i} - 1", f"{i} + 2", f"{name}0 % {n}"
-    turn = f"(1 if {i} == 0 else 2 if {i} == {n} - 1 else 0)"
-    return "0", "3", f"({i} - 1 + ({name}0 + {turn}) % 3) % {n}"
-
-
 def _cell_walk_3d(bodies, body: str, rows: str | None, count: bool) -> str:
     sel = bodies.plan.sel
     wrap = bodies._wrap()
-    xlo, xhi, cx = _axis_range(sel, "x", "ix", "ncx", "cx")
-    ylo, yhi, cy = _axis_range(sel, "y", "iy", "ncy", "cy")
-    zlo, zhi, cz = _axis_range(sel, "z", "iz", "ncz", "cz")
+    xlo, xhi, cx = cell_range(sel, "x", "ix", "ncx", "cx")
+    ylo, yhi, cy = cell_range(sel, "y", "iy", "ncy", "cy")
+    zlo, zhi, cz = cell_range(sel, "z", "iz", "ncz", "cz")
     fo = bodies.plan.fluid_pairs_only
     if rows is not None and not sel.periodic_x:
         notself = "" if count and bodies.plan.counts_self() else " & (b != a)"
@@ -178,8 +164,8 @@ def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -
     sel = bodies.plan.sel
     if sel.dim == 3:
         return _cell_walk_3d(bodies, body, rows, count)
-    xlo, xhi, cx = _axis_range(sel, "x", "ix", "ncx", "cx")
-    ylo, yhi, cy = _axis_range(sel, "y", "iy", "ncy", "cy")
+    xlo, xhi, cx = cell_range(sel, "x", "ix", "ncx", "cx")
+    ylo, yhi, cy = cell_range(sel, "y", "iy", "ncy", "cy")
     if rows is not None and not sel.periodic_x:
         cy = f"({cy})"
         wrap = bodies._wrap()

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 from sphfoam._version import __version__
 from sphfoam.engine import generated
-from sphfoam.engine.bodies import LoopBodies, _block, components, expand, particle_load
+from sphfoam.engine.bodies import (LoopBodies, _block, cell_range, components, expand,
+                                   particle_load)
 from sphfoam.engine.plan import Plan, Selection
 
 #: the arguments of every kernel over particles and their lists
@@ -35,19 +36,17 @@ _HEAD = """\
 
 def _walk(sel: Selection, body: str) -> str:
     """The 3 x 3 (x 3) cell walk around ``a`` (cells by row, rows by layer, particles by
-    cell: the CPU's order, cells numbered (cz ncy + cy) ncx + cx), ``body`` for each b
+    cell: the CPU's order, cells numbered (cz ncy + cy) ncx + cx, the three cells of an
+    axis as :func:`~sphfoam.engine.bodies.cell_range` gives them), ``body`` for each b
     within ``reach2`` (b != a; where ``skip``, no pair of two non-fluid particles).
     Periodic axes wrap the cell index and the pair's relative position."""
     axes = [ax for ax, _ in components(sel.dim)]
     out = [f"i{ax} = min(max(int(({ax}a - {ax}0) * inv_cell), 0), nc{ax} - 1)" for ax in axes]
     ind = ""
     for ax in reversed(axes):
-        i, n = f"i{ax}", f"nc{ax}"
-        if sel.periodic(ax):
-            out.append(f"{ind}for c{ax}0 in range({i} - 1, {i} + 2):")
-            out.append(f"{ind}    c{ax} = c{ax}0 % {n}")
-        else:
-            out.append(f"{ind}for c{ax} in range(max({i} - 1, 0), min({i} + 2, {n})):")
+        lo, hi, cell = cell_range(sel, ax, f"i{ax}", f"nc{ax}", f"c{ax}")
+        out.append(f"{ind}for c{ax}0 in range({lo}, {hi}):")
+        out.append(f"{ind}    c{ax} = {cell}")
         ind += "    "
     out.append(f"{ind}cc = {'(cz * ncy + cy)' if sel.dim == 3 else 'cy'} * ncx + cx")
     out.append(f"{ind}for b in range(cell_start[cc], cell_start[cc + 1]):")
