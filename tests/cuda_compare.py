@@ -1,5 +1,5 @@
 """Run a case on the CPU backend (gather over full lists) and on the CUDA backend and print
-the largest relative difference of x, y, u, v, rho after N steps, one JSON line per case.
+the largest relative difference of x, y, u, v, rho, m after N steps, one JSON line per case.
 
     python tests/cuda_compare.py CASE_DIR_OR_NAME [--dx DX] [--steps N] [edits as JSON]
 
@@ -23,7 +23,7 @@ def _fields(sim):
     st = sim.state
     order = np.argsort(st.id, kind="stable")
     return {k: np.asarray(getattr(st, k), dtype=np.float64)[order]
-            for k in ("x", "y", "u", "v", "rho")}, st.id[order]
+            for k in ("x", "y", "u", "v", "rho", "m")}, st.id[order]
 
 
 def compare(src: Path, edits: dict, steps: int) -> dict:

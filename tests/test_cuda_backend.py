@@ -37,24 +37,103 @@ CASES = [("damBreakMatched", 0.1, 5),
          pytest.param("solitaryWave", 0.125, 3, marks=_SLOW)]
 
 
-def _compare(case: str, dx, steps: int) -> dict:
+def _compare(case: str, dx, steps: int, edits: dict | None = None) -> dict:
     env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
     cmd = [sys.executable, str(ROOT / "tests" / "cuda_compare.py"), case,
-           "--steps", str(steps)] + (["--dx", str(dx)] if dx else [])
+           "--steps", str(steps)] + (["--dx", str(dx)] if dx else []) \
+        + (["--edits", json.dumps(edits)] if edits else [])
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
     line = [x for x in out.stdout.splitlines() if x.startswith("RESULT ")]
     assert line, out.stdout[-2000:] + out.stderr[-4000:]
     return json.loads(line[-1][7:])
 
 
-@pytest.mark.parametrize("case, dx, steps", CASES)
-def test_cuda_matches_cpu_under_the_simulator(case, dx, steps):
-    res = _compare(case, dx, steps)
+#: the models whose run-time hooks run on the device in their declared forms
+#: (sphfoam.engine.hookforms), each about 15-25 s on the simulator: XSPH then a delta+
+#: shifting with its three corrections under monaghan2007 (advection U + dv + delta_u,
+#: after_rates, after_density_rate, after_step's mass) on 50 fluid particles; the mixing
+#: length's wall distance on the turbulent channel cut to half its height (300 particles).
+#: surfaceLambda 0: on a block of 5 x 10 particles every one is near the surface, and the
+#: normal of an interior particle of the lattice is the direction of its round-off (nu ~ 0),
+#: which the tangential rule would turn into differences of order one
+HOOK_CASES = [
+    ("damBreakMatched", 0.2, 3, {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
+        "constant/sphProperties:velocityCorrection": {"type": "xsph"},
+        "constant/sphProperties:particleShifting": {
+            "type": "deltaPlusShifting", "surfaceLambda": 0, "correctVelocity": "yes",
+            "correctDensity": "yes", "correctMass": "yes"}}),
+    ("turbulentChannel", None, 3, {
+        "system/particleDict:fluid.channel.max": [0.3, 0.4875],
+        "system/particleDict:walls.top.points": [[0, 0.4875], [0.3, 0.4875]],
+        "system/particleDict:domain.max": [0.3, 0.6],
+        "constant/sphProperties:turbulence.outerLength": 0.25})]
+
+
+@pytest.mark.parametrize("case, dx, steps, edits",
+                         [(*c, None) for c in CASES] + HOOK_CASES)
+def test_cuda_matches_cpu_under_the_simulator(case, dx, steps, edits):
+    res = _compare(case, dx, steps, edits)
     assert "error" not in res, res
     assert res["same_ids"]
     assert res["dt_rel"] < 1e-12, res
     for k, rel in res["rel"].items():
         assert rel < RTOL, (k, res)
+
+
+#: mixingLength's wall distance on the device: a state whose lineDist is zero gets it at
+#: the build of the simulation (attach); particles moved on the device get theirs anew at
+#: the next build of the list (before_neighbours); both as line_distance on the host
+_WALL_FIELD = """
+import json, sys, tempfile
+from pathlib import Path
+import numpy as np
+from sphfoam.assemble import build_simulation
+from sphfoam.case.case import Case
+from sphfoam.case.edit import clone_case
+from sphfoam.engine.state import ParticleState
+from sphfoam.io.fields import read_state
+from sphfoam.models.mirror import line_distance, segment_array
+from sphfoam.setup import setup_case
+
+d = clone_case(Path(sys.argv[1]), Path(tempfile.mkdtemp()) / "c", json.loads(sys.argv[2]))
+case = Case(d)
+setup_case(case, log=lambda *_: None)
+st = ParticleState.from_fields(read_state(d / "0"))
+st.extra["lineDist"][:] = 0.0
+sim = build_simulation(case, st, backend="cuda")
+seg = segment_array(sim.segments)
+
+def error():
+    s = sim.state
+    want = np.empty(s.n)
+    line_distance(s.x, s.y, seg, want)
+    return float(np.max(np.abs(s.extra["lineDist"] - want)))
+
+out = {"attach": error()}
+y = sim.d["y"].copy_to_host()
+y += 0.004 * np.sin(40.0 * sim.d["x"].copy_to_host())
+sim.d["y"].copy_to_device(y)
+sim._dirty = True
+out["moved"] = error()
+sim.invalidate_neighbours()
+sim.neighbour_update()
+out["built"] = error()
+print("RESULT " + json.dumps(out))
+"""
+
+
+def test_a_wall_field_is_made_at_attach_and_at_every_list_build():
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-c", _WALL_FIELD,
+                          str(ROOT / "tutorials" / "turbulentChannel"),
+                          json.dumps(HOOK_CASES[1][3])],
+                         env=env, capture_output=True, text=True, timeout=600)
+    line = [x for x in out.stdout.splitlines() if x.startswith("RESULT ")]
+    assert line, out.stdout[-2000:] + out.stderr[-4000:]
+    res = json.loads(line[-1][7:])
+    assert res["attach"] < 1e-12 and res["built"] < 1e-12, res
+    assert res["moved"] > 1e-3, res          # the move changed the distances
 
 
 def test_a_model_with_no_device_form_is_refused_by_name(tutorial):
@@ -65,8 +144,28 @@ def test_a_model_with_no_device_form_is_refused_by_name(tutorial):
     case = Case(tutorial("solitaryCollision"))
     with pytest.raises(Unsupported, match="boundary 'mirrorGhosts'"):
         check_supported(selection(case))
-    with pytest.raises(Unsupported, match="velocityCorrection 'xsph'"):
+    case = Case(tutorial("damBreak", {"constant/sphProperties:boundary": {"type": "adami"}}))
+    with pytest.raises(Unsupported, match=r"boundary 'adami': its run-time hooks \(attach, "
+                       r"before_evaluation, walls_moved, after_step\)"):
         check_supported(selection(case))
+
+
+def test_models_with_declared_hook_forms_are_not_refused(tutorial):
+    from sphfoam.assemble import selection
+    from sphfoam.case.case import Case
+    from sphfoam.engine.cuda.build import refusals
+
+    for shifting in ("deltaPlusShifting", "lindShifting"):
+        sel = selection(Case(tutorial("damBreak", {
+            "constant/sphProperties:velocityCorrection": {"type": "xsph"},
+            "constant/sphProperties:particleShifting": {
+                "type": shifting, "correctVelocity": "yes", "correctDensity": "yes",
+                "correctMass": "yes"}})))
+        assert sel.particleShifting.implements("after_step")
+        assert refusals(sel) == []
+    sel = selection(Case(tutorial("turbulentChannel")))
+    assert sel.turbulence.name == "mixingLength" and sel.turbulence.implements("attach")
+    assert refusals(sel) == []
 
 
 def test_backend_is_a_checked_schemes_entry(tutorial):

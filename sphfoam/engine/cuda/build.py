@@ -7,13 +7,15 @@ from __future__ import annotations
 import numpy as np
 
 from sphfoam.engine.generated import load_generated
+from sphfoam.engine.hookforms import uncovered
 from sphfoam.engine.plan import Selection
 
 #: the core coefficients every pipeline reads first (the same slots as the CPU's)
 CORE = ("h", "inv_h", "support2", "eta2", "gx", "gy")
 
 #: the run-time hooks (``sphfoam.models.base.HOOK_NAMES``): Python between stages on host
-#: arrays, which the device runtime does not run
+#: arrays, which the device runtime runs only in their declared forms
+#: (``sphfoam.engine.hookforms``, :mod:`sphfoam.engine.cuda.hooks`)
 _HOOKS = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
           "before_evaluation", "after_rates", "after_density_rate", "walls_moved",
           "after_step", "advection_velocity", "summary")
@@ -29,10 +31,10 @@ def refusals(sel: Selection, motions=None) -> list[str]:
     if sel.dim != 2:
         out.append("3-D cases: the CUDA backend runs two dimensions")
     for m in sel.models():
-        hooks = [h for h in _HOOKS if m.implements(h)]
+        hooks = uncovered(m, _HOOKS)
         if hooks:
             out.append(f"{m.family} {m.name!r}: its run-time hooks ({', '.join(hooks)}) run "
-                       "on host arrays")
+                       "on host arrays (no device form)")
     return out
 
 
