@@ -7,6 +7,8 @@ Imported only once numba.cuda can run (:func:`sphfoam.engine.cuda.cuda_module`).
 
 from __future__ import annotations
 
+import types
+
 import numpy as np
 from numba import cuda
 
@@ -37,24 +39,27 @@ def add_aux(target, aux, row, scale, kind, fluid_only):
         target[a] += scale * aux[row, a]
 
 
+def _wall_field(x, y, seg, out):
+    """out[a] = wall_function(x[a], y[a], seg), ``wall_function`` bound by
+    :func:`wall_field_kernel`."""
+    a = cuda.grid(1)
+    if a >= x.shape[0]:
+        return
+    out[a] = wall_function(x[a], y[a], seg)  # noqa: F821  (bound per function)
+
+
 _FIELD_KERNELS: dict[int, object] = {}
 
 
 def wall_field_kernel(function):
     """The kernel out[a] = ``function(x[a], y[a], seg)`` (``function`` a jitted scalar
-    function, compiled as a device function: the host loop's arithmetic)."""
+    function, compiled as a device function: the host loop's arithmetic), bound as a global
+    of its own copy of :func:`_wall_field` (as ``device_function`` binds helpers)."""
     key = id(function)
     if key not in _FIELD_KERNELS:
-        f = device_function(function)
-
-        @cuda.jit
-        def wall_field(x, y, seg, out):
-            a = cuda.grid(1)
-            if a >= x.shape[0]:
-                return
-            out[a] = f(x[a], y[a], seg)
-
-        _FIELD_KERNELS[key] = wall_field
+        glb = dict(_wall_field.__globals__, wall_function=device_function(function))
+        _FIELD_KERNELS[key] = cuda.jit(types.FunctionType(_wall_field.__code__, glb,
+                                                          "wall_field"))
     return _FIELD_KERNELS[key]
 
 
