@@ -49,16 +49,19 @@ def _compare(case: str, dx, steps: int, edits: dict | None = None) -> dict:
 
 
 #: the models whose run-time hooks run on the device in their declared forms
-#: (sphfoam.engine.hookforms), each about 15-25 s on the simulator: XSPH then a delta+
-#: shifting with its three corrections under monaghan2007 (advection U + dv + delta_u,
-#: after_rates, after_density_rate, after_step's mass) on 50 fluid particles; the mixing
-#: length's wall distance on the turbulent channel cut to half its height (300 particles).
+#: (sphfoam.engine.hookforms), each about 15-25 s on the simulator: Adami's boundary, XSPH
+#: then a delta+ shifting with its three corrections under monaghan2007 (the walls'
+#: velocity put back before every evaluation and after the step, advection U + dv +
+#: delta_u, after_rates, after_density_rate, after_step's mass) on 50 fluid particles; the
+#: mixing length's wall distance on the turbulent channel cut to half its height (300
+#: particles).
 #: surfaceLambda 0: on a block of 5 x 10 particles every one is near the surface, and the
 #: normal of an interior particle of the lattice is the direction of its round-off (nu ~ 0),
 #: which the tangential rule would turn into differences of order one
 HOOK_CASES = [
     ("damBreakMatched", 0.2, 3, {
         "system/sphSchemes:integrator": {"type": "monaghan2007"},
+        "constant/sphProperties:boundary": {"type": "adami"},
         "constant/sphProperties:velocityCorrection": {"type": "xsph"},
         "constant/sphProperties:particleShifting": {
             "type": "deltaPlusShifting", "surfaceLambda": 0, "correctVelocity": "yes",
@@ -136,18 +139,23 @@ def test_a_wall_field_is_made_at_attach_and_at_every_list_build():
     assert res["moved"] > 1e-3, res          # the move changed the distances
 
 
-def test_a_model_with_no_device_form_is_refused_by_name(tutorial):
+def test_a_model_with_no_device_form_is_refused_by_name(tutorial, monkeypatch):
     from sphfoam.assemble import selection
     from sphfoam.case.case import Case
     from sphfoam.engine.cuda.build import Unsupported, check_supported
+    from sphfoam.models.adami import Adami
 
     case = Case(tutorial("solitaryCollision"))
     with pytest.raises(Unsupported, match="boundary 'mirrorGhosts'"):
         check_supported(selection(case))
-    case = Case(tutorial("damBreak", {"constant/sphProperties:boundary": {"type": "adami"}}))
+    # a model's hooks without their declared forms: refused, naming the hooks
+    sel = selection(Case(tutorial("damBreak", {
+        "constant/sphProperties:boundary": {"type": "adami"}})))
+    check_supported(sel)
+    monkeypatch.setattr(Adami, "device_forms", lambda self: ())
     with pytest.raises(Unsupported, match=r"boundary 'adami': its run-time hooks \(attach, "
                        r"before_evaluation, walls_moved, after_step\)"):
-        check_supported(selection(case))
+        check_supported(sel)
 
 
 def test_models_with_declared_hook_forms_are_not_refused(tutorial):
@@ -163,6 +171,9 @@ def test_models_with_declared_hook_forms_are_not_refused(tutorial):
                 "correctMass": "yes"}})))
         assert sel.particleShifting.implements("after_step")
         assert refusals(sel) == []
+    sel = selection(Case(tutorial("damBreak", {
+        "constant/sphProperties:boundary": {"type": "adami", "noSlip": "no"}})))
+    assert refusals(sel) == []
     sel = selection(Case(tutorial("turbulentChannel")))
     assert sel.turbulence.name == "mixingLength" and sel.turbulence.implements("attach")
     assert refusals(sel) == []

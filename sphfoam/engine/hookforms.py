@@ -12,7 +12,9 @@ there instead of the hook; a hook with no declared form keeps the model off that
   array plus an auxiliary field (times the step just taken, for ``after_step``);
 * :class:`WallField`: ``attach``, ``before_neighbours``, ``walls_moved`` and
   ``keeps_neighbours``, a particle field that is a function of the position and the walls'
-  segments, at every build of the neighbour list (e.g. the distance from the wall lines).
+  segments, at every build of the neighbour list (e.g. the distance from the wall lines);
+* :class:`WallVelocity`: ``attach``, ``walls_moved``, ``before_evaluation`` and
+  ``after_step``, the wall particles' prescribed velocity put back (Adami's boundary).
 
 Names hold ``@`` for the components as the terms write them (``xsph_dU@``: xsph_du,
 xsph_dv (, xsph_dw); ``a@``: ax, ay (, az)); :func:`sphfoam.engine.stepping.components`
@@ -75,6 +77,16 @@ class WallField:
     needs_walls: str = ""
 
     hooks = ("attach", "before_neighbours", "walls_moved", "keeps_neighbours")
+
+
+@dataclass(frozen=True)
+class WallVelocity:
+    """The wall particles' prescribed velocity put back before every evaluation and after
+    every step (for a boundary whose prepass overwrites it with an extrapolated one): each
+    wall particle's velocity as set up, recorded by particle id when the simulation is
+    built, or, once walls have moved, its wall entry's velocity (``walls_moved``)."""
+
+    hooks = ("attach", "walls_moved", "before_evaluation", "after_step")
 
 
 def device_forms(model) -> tuple:

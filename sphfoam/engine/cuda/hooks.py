@@ -13,7 +13,9 @@ import numpy as np
 from numba import cuda
 
 from sphfoam.engine.cuda.device import THREADS, blocks, device_function
-from sphfoam.engine.hookforms import AdvectionCorrection, AuxAddition, WallField, device_forms
+from sphfoam.engine.hookforms import (AdvectionCorrection, AuxAddition, WallField,
+                                      WallVelocity, device_forms)
+from sphfoam.engine.state import WALL
 from sphfoam.engine.stepping import components
 
 
@@ -37,6 +39,26 @@ def add_aux(target, aux, row, scale, kind, fluid_only):
         return
     if not fluid_only or kind[a] == 0:
         target[a] += scale * aux[row, a]
+
+
+@cuda.jit
+def wall_velocity(u, u0, pid, kind):
+    """u = u0[id] of every wall particle (its velocity as set up, by particle id)."""
+    a = cuda.grid(1)
+    if a >= u.shape[0]:
+        return
+    if kind[a] == WALL:
+        u[a] = u0[pid[a]]
+
+
+@cuda.jit
+def patch_velocity(u, patch, kind, which, uu):
+    """u = uu of the wall particles of wall entry ``which``."""
+    a = cuda.grid(1)
+    if a >= u.shape[0]:
+        return
+    if kind[a] == WALL and patch[a] == which:
+        u[a] = uu
 
 
 def _wall_field(x, y, seg, out):
@@ -82,6 +104,18 @@ class DeviceHooks:
                     (components(f.target, dim), [aux.index(k) for k in components(f.aux, dim)],
                      f.fluid_only))
         self.fields = [f for f in forms if isinstance(f, WallField)]
+        #: the walls' velocities as set up by particle id, per component (WallVelocity)
+        self.wall_u0 = None
+        if any(isinstance(f, WallVelocity) for f in forms):
+            st = sim._host
+            wall = st.kind == WALL
+            n_id = int(st.id[wall].max()) + 1 if wall.any() else 0
+            self.wall_u0 = []
+            for k in components("U@", dim):
+                u0 = np.zeros(max(n_id, 1))
+                u0[st.id[wall]] = getattr(st, k)[wall]
+                self.wall_u0.append(sim._to(u0, np.float64))
+        self._wall_velocities = {}
         self._pU = None
         self._offsets = None
         self._seg = None
@@ -114,13 +148,39 @@ class DeviceHooks:
     def run(self, hook: str, scale: float = 1.0):
         """The additions declared for ``hook`` (``after_step``: ``scale`` the step taken)."""
         sim = self.sim
+        if hook == "after_step":
+            self._put_back_wall_velocity()
         for targets, rows, fluid_only in self.additions.get(hook, ()):
             for t, row in zip(targets, rows):
                 self._launch(add_aux, sim.d[t], sim.d_aux, row, float(scale), sim.d["kind"],
                              fluid_only)
 
+    def before_evaluation(self):
+        """What the models do before every evaluation (and when walls move)."""
+        self._put_back_wall_velocity()
+
+    def _put_back_wall_velocity(self):
+        """The prescribed velocity back on the wall particles (WallVelocity): as set up,
+        or their wall entry's where walls have moved."""
+        if self.wall_u0 is None:
+            return
+        sim = self.sim
+        dim = sim.selection.dim
+        kind = sim.d["kind"]
+        for k, u0 in zip(components("U@", dim), self.wall_u0):
+            self._launch(wall_velocity, sim.d[k], u0, sim.d["id"], kind)
+        if self._wall_velocities and ("patch" in sim.d_extra or
+                                      "patch" in sim.module.FIELDS):
+            patch = sim._extra("patch")
+            for which, vel in self._wall_velocities.items():
+                for k, uu in zip(components("U@", dim), vel):
+                    self._launch(patch_velocity, sim.d[k], patch, kind, float(which),
+                                 float(uu))
+
     def walls_moved(self, offsets, velocities):
-        """The walls' segments where the wall entries' motions put them."""
+        """The walls' segments where the wall entries' motions put them; their
+        velocities."""
+        self._wall_velocities = dict(velocities or {})
         if self.fields:
             from sphfoam.models.mirror import segment_array
 

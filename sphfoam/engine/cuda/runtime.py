@@ -363,11 +363,13 @@ class CudaSimulation:
             self._timed("prepass", self._launch, getattr(m, f"prepass_{i}"), self.n, *args)
 
     def eos(self):
+        self.hooks.before_evaluation()
         d = self.d
         self._timed("eos", self._launch, self.module.equation_of_state, self.n, d["rho"],
                     d["p"], d["c"], self.d_prm)
 
     def rates(self):
+        self.hooks.before_evaluation()
         args = self._args()
         self._prepass(args)
         sigma = True
@@ -381,6 +383,7 @@ class CudaSimulation:
         self.hooks.run("after_rates")
 
     def density_rate(self):
+        self.hooks.before_evaluation()
         args = self._args()
         self._prepass(args, "density")
         self._timed("density", self._launch, self.module.density_rate, self.n, *args,
@@ -430,6 +433,7 @@ class CudaSimulation:
             return
         self.hooks.walls_moved({w: m.displacement(t) for w, m in self.motions.items()},
                                {w: m.velocity(t) for w, m in self.motions.items()})
+        self.hooks.before_evaluation()
         if "patch" not in self.d_extra and "patch" not in self.module.FIELDS:
             return
         d = self.d
