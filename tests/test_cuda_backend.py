@@ -26,15 +26,15 @@ ROOT = Path(__file__).resolve().parent.parent
 #: relative to each field's largest magnitude, after the steps below
 RTOL = 1e-9
 
-#: (case, dx, steps): the matched case (always, about 80 s on the simulator), and the
+#: (case, dx, steps, edits): the matched case (always, about 80 s on the simulator), and the
 #: tutorial selections the device supports that it does not cover (each about 90 s: with
 #: SPHFOAM_SLOW_TESTS=1): damBreak (quartic, symmetric, artificial viscosity, Monaghan
 #: 2007), solitaryWave (laminar, Shepard filter, the paddle's prescribed motion)
 _SLOW = pytest.mark.skipif(os.environ.get("SPHFOAM_SLOW_TESTS") != "1",
                            reason="the CUDA simulator, 90 s: set SPHFOAM_SLOW_TESTS=1")
-CASES = [("damBreakMatched", 0.1, 5),
-         pytest.param("damBreak", 0.02, 5, marks=_SLOW),
-         pytest.param("solitaryWave", 0.125, 3, marks=_SLOW)]
+CASES = [("damBreakMatched", 0.1, 5, None),
+         pytest.param("damBreak", 0.02, 5, None, marks=_SLOW),
+         pytest.param("solitaryWave", 0.125, 3, None, marks=_SLOW)]
 
 
 def _compare(case: str, dx, steps: int, edits: dict | None = None) -> dict:
@@ -70,11 +70,16 @@ HOOK_CASES = [
         "system/particleDict:fluid.channel.max": [0.3, 0.4875],
         "system/particleDict:walls.top.points": [[0, 0.4875], [0.3, 0.4875]],
         "system/particleDict:domain.max": [0.3, 0.6],
-        "constant/sphProperties:turbulence.outerLength": 0.25})]
+        "constant/sphProperties:turbulence.outerLength": 0.25}),
+    # Adami's walls on a 3 m flume with the paddle's motion: its wall entry's velocity put
+    # back on the paddle's particles (walls_moved), 35 s
+    pytest.param("solitaryWave", 0.125, 3, {
+        "constant/sphProperties:boundary": {"type": "adami"},
+        "system/particleDict:fluid.water.max": [3, 0.5],
+        "system/particleDict:walls.flume.max": [3, 1.2]}, marks=_SLOW)]
 
 
-@pytest.mark.parametrize("case, dx, steps, edits",
-                         [(*c, None) for c in CASES] + HOOK_CASES)
+@pytest.mark.parametrize("case, dx, steps, edits", CASES + HOOK_CASES)
 def test_cuda_matches_cpu_under_the_simulator(case, dx, steps, edits):
     res = _compare(case, dx, steps, edits)
     assert "error" not in res, res
