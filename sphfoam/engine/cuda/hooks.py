@@ -117,7 +117,6 @@ class DeviceHooks:
                 self.wall_u0.append(sim._to(u0, np.float64))
         self._wall_velocities = {}
         self._pU = None
-        self._offsets = None
         self._seg = None
         if self.fields:
             from sphfoam.case.errors import CaseError
