@@ -4,7 +4,7 @@
 #     bash benchmarks/gpu_check.sh            # (carry .whl: the wheels the machine lacks)
 #
 # Installs the wheels in .whl/ (pydantic and its kin, meshio) into /tmp/site, then, each part
-# independent of the others' failure, everything tee'd into $OUT/*.log (total <= 6 minutes):
+# independent of the others' failure, everything tee'd into $OUT/*.log (total <= 8 minutes):
 #   1. nvidia-smi                                                  -> $OUT/nvidia-smi.log
 #   2. CUDA vs CPU backend on the real device (no simulator):      -> $OUT/compare.log
 #      the matched dam break and the tutorial selections the device supports, a few hundred
@@ -38,6 +38,12 @@ python3 -c "from sphfoam.engine.cuda import cuda_module; c = cuda_module(); impo
   timeout 50 python3 tests/cuda_compare.py solitaryWave --dx 0.1 --steps 200
   timeout 50 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300 \
       --edits '{"system/sphSchemes:precision": "single"}'
+  # the models' hooks in their declared forms: the mixing length's wall distance; Adami's
+  # walls, XSPH and a delta+ shifting with its corrections (surfaceLambda 0 as in
+  # tests/test_cuda_backend.py: no tangential rule on normals of round-off)
+  timeout 60 python3 tests/cuda_compare.py turbulentChannel --steps 300
+  timeout 80 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300 \
+      --edits '{"system/sphSchemes:integrator": {"type": "monaghan2007"}, "constant/sphProperties:boundary": {"type": "adami"}, "constant/sphProperties:velocityCorrection": {"type": "xsph"}, "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "surfaceLambda": 0, "correctVelocity": "yes", "correctDensity": "yes", "correctMass": "yes"}}'
 ) 2>&1 | tee "$OUT/compare.log"
 
 # 3. sphfoam run with backend cuda (the CLI's --backend)
