@@ -193,3 +193,32 @@ def test_backend_is_a_checked_schemes_entry(tutorial):
         == "cuda"
     with pytest.raises(Exception, match="backend"):
         Case(tutorial("damBreak", {"system/sphSchemes:backend": "opencl"})).schemes
+
+
+def test_declared_forms_stand_for_hooks_the_model_implements():
+    """A form runs on the device only what the model's own hooks do on the host: every hook
+    a declared form stands for is one the model implements (with every correction of the
+    shiftings on and off, the mixing length with and without a wall law)."""
+    from sphfoam import registry
+    from sphfoam.engine.cuda.build import _HOOKS
+    from sphfoam.engine.hookforms import device_forms, uncovered
+
+    variants = {"particleShifting": [{}, {"correctVelocity": True},
+                                     {"correctDensity": True, "correctMass": True}],
+                "turbulence": [{}, {"wallLaw": "smooth"}]}
+    declared = set()
+    for family, models in registry.families().items():
+        for name, cls in models.items():
+            for extra in variants.get(family, [{}]):
+                try:
+                    m = registry.build(family, {"type": name, **extra})
+                except Exception:  # noqa: BLE001  (a model that needs coefficients)
+                    continue
+                forms = device_forms(m)
+                for f in forms:
+                    for h in f.hooks:
+                        assert m.implements(h), (family, name, extra, f, h)
+                if forms:
+                    declared.add(name)
+                    assert uncovered(m, _HOOKS) == [], (family, name, extra)
+    assert {"xsph", "deltaPlusShifting", "lindShifting", "mixingLength", "adami"} <= declared
