@@ -67,14 +67,18 @@ class WallField:
     """Particle field ``field`` = ``function(x_a, y_a, seg)`` for every particle, when the
     simulation is built and before every build of the neighbour list (between builds no
     particle moves more than half the list's skin, so the list is kept: ``keeps_neighbours``
-    True); ``seg`` the (S, 9) segment array (``sphfoam.models.mirror.segment_array``) of the
-    walls where the last ``walls_moved`` put them. ``function`` a jitted scalar function
+    True); ``seg`` the array ``segments`` makes of the walls where the last ``walls_moved``
+    put them. ``function`` a jitted scalar function
     (``sphfoam.engine.cuda.device.device_function`` compiles it for the device)."""
 
     field: str
     function: Callable
-    #: why the model needs walls (a case with none is refused with it), or "" if it does not
-    needs_walls: str = ""
+    #: (segments, offsets, velocities) -> ``seg``: the walls' segments moved by the wall
+    #: entries' offsets (``sphfoam.models.mirror.segment_array``)
+    segments: Callable
+    #: called with the walls' segments when the simulation is built: raises where the model
+    #: cannot work with them (e.g. none), or None
+    check: Callable | None = None
 
     hooks = ("attach", "before_neighbours", "walls_moved", "keeps_neighbours")
 

@@ -240,6 +240,14 @@ def _wall_law_boundary(bnd) -> bool:
     return bnd.wall_placement != "none" and "wetWall" in bnd.neighbour_kinds()
 
 
+def _needs_walls(segments) -> None:
+    """The mixing length is measured from the walls: a case without any is refused."""
+    if not segments:
+        raise CaseError.single("system/particleDict", "walls",
+                               "turbulence mixingLength measures its mixing length from the "
+                               "walls, and there are none")
+
+
 @register
 class MixingLength(SmagorinskySPS):
     """Prandtl's mixing-length eddy viscosity for wall-bounded flows, nu_t = l_m^2 |S|.
@@ -355,16 +363,14 @@ if ml_det > 0.1:                                   # grad v = G L^-1 (exact for 
 
     # --- run-time hooks: the wall distance of the moved particles ----------------------------
     #: the hooks below, declared (``device_forms``): lineDist from the walls' segments
-    _LINE_DIST = WallField("lineDist", nearest_line_distance, needs_walls=(
-        "turbulence mixingLength measures its mixing length from the walls, and there are "
-        "none"))
+    _LINE_DIST = WallField("lineDist", nearest_line_distance, segment_array,
+                           check=_needs_walls)
 
     def device_forms(self):
         return (self._LINE_DIST,)
 
     def attach(self, run):
-        if not run.segments:
-            raise CaseError.single("system/particleDict", "walls", self._LINE_DIST.needs_walls)
+        _needs_walls(run.segments)
         self._seg = segment_array(run.segments)
         self._update(run)
 

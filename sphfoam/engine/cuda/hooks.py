@@ -117,13 +117,11 @@ class DeviceHooks:
                 self.wall_u0.append(sim._to(u0, np.float64))
         self._wall_velocities = {}
         self._pU = None
-        self._seg = None
+        self._seg = []
         if self.fields:
-            from sphfoam.case.errors import CaseError
-
             for f in self.fields:
-                if f.needs_walls and not sim.segments:
-                    raise CaseError.single("system/particleDict", "walls", f.needs_walls)
+                if f.check is not None:
+                    f.check(sim.segments)
             self.walls_moved(None, None)
             self.before_neighbours()
 
@@ -180,16 +178,13 @@ class DeviceHooks:
         """The walls' segments where the wall entries' motions put them; their
         velocities."""
         self._wall_velocities = dict(velocities or {})
-        if self.fields:
-            from sphfoam.models.mirror import segment_array
-
-            seg = segment_array(self.sim.segments, offsets, velocities)
-            self._seg = self.sim._to(seg.reshape(-1, 9), np.float64)
+        self._seg = [self.sim._to(f.segments(self.sim.segments, offsets, velocities),
+                                  np.float64) for f in self.fields]
 
     def before_neighbours(self):
         """Every declared wall field of every particle, before the list is built."""
         sim = self.sim
-        for f in self.fields:
-            self._launch(wall_field_kernel(f.function), sim.d["x"], sim.d["y"], self._seg,
+        for f, seg in zip(self.fields, self._seg):
+            self._launch(wall_field_kernel(f.function), sim.d["x"], sim.d["y"], seg,
                          sim._extra(f.field))
             sim._dirty = True
