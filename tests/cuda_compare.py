@@ -1,6 +1,7 @@
 """Run a case on the CPU backend (gather over full lists) and on the CUDA backend and print
-the largest relative difference of x, y, u, v, rho (z, w in 3-D) after N steps, one JSON
-line per case.
+the largest relative difference of x, y, u, v, rho, m (z, w in 3-D) after N steps, one
+JSON line per case (each field against its largest magnitude, a velocity component
+against the velocity's largest component).
 
     python tests/cuda_compare.py CASE_DIR_OR_NAME [--dx DX] [--steps N] [edits as JSON]
 
@@ -26,7 +27,7 @@ def _fields(sim):
     st = sim.state
     order = np.argsort(st.id, kind="stable")
     return {k: np.asarray(getattr(st, k), dtype=np.float64)[order]
-            for k in (*"xyz"[:st.dim], *"uvw"[:st.dim], "rho")}, st.id[order]
+            for k in (*"xyz"[:st.dim], *"uvw"[:st.dim], "rho", "m")}, st.id[order]
 
 
 def compare(src: Path, edits: dict, steps: int) -> dict:

@@ -79,28 +79,142 @@ def _compare(case: str, dx, steps: int, edits: dict) -> dict:
     return json.loads(line[-1][7:])
 
 
-@pytest.mark.parametrize("case, dx, steps, edits", CASES)
+#: the models whose run-time hooks run on the device in their declared forms
+#: (sphfoam.engine.hookforms), each about 15-25 s on the simulator: Adami's boundary, XSPH
+#: then a delta+ shifting with its three corrections under monaghan2007 (the walls'
+#: velocity put back before every evaluation and after the step, advection U + dv +
+#: delta_u, after_rates, after_density_rate, after_step's mass) on 50 fluid particles; the
+#: mixing length's wall distance on the turbulent channel cut to half its height (300
+#: particles).
+#: surfaceLambda 0: on a block of 5 x 10 particles every one is near the surface, and the
+#: normal of an interior particle of the lattice is the direction of its round-off (nu ~ 0),
+#: which the tangential rule would turn into differences of order one
+HOOK_CASES = [
+    ("damBreakMatched", 0.2, 3, {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
+        "constant/sphProperties:boundary": {"type": "adami"},
+        "constant/sphProperties:velocityCorrection": {"type": "xsph"},
+        "constant/sphProperties:particleShifting": {
+            "type": "deltaPlusShifting", "surfaceLambda": 0, "correctVelocity": "yes",
+            "correctDensity": "yes", "correctMass": "yes"}}),
+    ("turbulentChannel", None, 3, {
+        "system/particleDict:fluid.channel.max": [0.3, 0.4875],
+        "system/particleDict:walls.top.points": [[0, 0.4875], [0.3, 0.4875]],
+        "system/particleDict:domain.max": [0.3, 0.6],
+        "constant/sphProperties:turbulence.outerLength": 0.25}),
+    # Adami's walls on a 3 m flume with the paddle's motion: its wall entry's velocity put
+    # back on the paddle's particles (walls_moved), 35 s
+    pytest.param("solitaryWave", 0.125, 3, {
+        "constant/sphProperties:boundary": {"type": "adami"},
+        "system/particleDict:fluid.water.max": [3, 0.5],
+        "system/particleDict:walls.flume.max": [3, 1.2]}, marks=_SLOW)]
+
+
+@pytest.mark.parametrize("case, dx, steps, edits", CASES + HOOK_CASES)
 def test_cuda_matches_cpu_under_the_simulator(case, dx, steps, edits):
     res = _compare(case, dx, steps, edits)
     assert "error" not in res, res
     dim = 3 if case.endswith("3D") else 2
-    assert sorted(res["rel"]) == sorted(["rho", *"xyz"[:dim], *"uvw"[:dim]]), res
+    assert sorted(res["rel"]) == sorted(["rho", "m", *"xyz"[:dim], *"uvw"[:dim]]), res
     assert res["same_ids"]
     assert res["dt_rel"] < 1e-12, res
     for k, rel in res["rel"].items():
         assert rel < RTOL, (k, res)
 
 
-def test_a_model_with_no_device_form_is_refused_by_name(tutorial):
+#: mixingLength's wall distance on the device: a state whose lineDist is zero gets it at
+#: the build of the simulation (attach); particles moved on the device get theirs anew at
+#: the next build of the list (before_neighbours); both as line_distance on the host
+_WALL_FIELD = """
+import json, sys, tempfile
+from pathlib import Path
+import numpy as np
+from sphfoam.assemble import build_simulation
+from sphfoam.case.case import Case
+from sphfoam.case.edit import clone_case
+from sphfoam.engine.state import ParticleState
+from sphfoam.io.fields import read_state
+from sphfoam.models.mirror import line_distance, segment_array
+from sphfoam.setup import setup_case
+
+d = clone_case(Path(sys.argv[1]), Path(tempfile.mkdtemp()) / "c", json.loads(sys.argv[2]))
+case = Case(d)
+setup_case(case, log=lambda *_: None)
+st = ParticleState.from_fields(read_state(d / "0"))
+st.extra["lineDist"][:] = 0.0
+sim = build_simulation(case, st, backend="cuda")
+seg = segment_array(sim.segments)
+
+def error():
+    s = sim.state
+    want = np.empty(s.n)
+    line_distance(s.x, s.y, seg, want)
+    return float(np.max(np.abs(s.extra["lineDist"] - want)))
+
+out = {"attach": error()}
+y = sim.d["y"].copy_to_host()
+y += 0.004 * np.sin(40.0 * sim.d["x"].copy_to_host())
+sim.d["y"].copy_to_device(y)
+sim._dirty = True
+out["moved"] = error()
+sim.invalidate_neighbours()
+sim.neighbour_update()
+out["built"] = error()
+print("RESULT " + json.dumps(out))
+"""
+
+
+def test_a_wall_field_is_made_at_attach_and_at_every_list_build():
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-c", _WALL_FIELD,
+                          str(ROOT / "tutorials" / "turbulentChannel"),
+                          json.dumps(HOOK_CASES[1][3])],
+                         env=env, capture_output=True, text=True, timeout=600)
+    line = [x for x in out.stdout.splitlines() if x.startswith("RESULT ")]
+    assert line, out.stdout[-2000:] + out.stderr[-4000:]
+    res = json.loads(line[-1][7:])
+    assert res["attach"] < 1e-12 and res["built"] < 1e-12, res
+    assert res["moved"] > 1e-3, res          # the move changed the distances
+
+
+def test_a_model_with_no_device_form_is_refused_by_name(tutorial, monkeypatch):
     from sphfoam.assemble import selection
     from sphfoam.case.case import Case
     from sphfoam.engine.cuda.build import Unsupported, check_supported
+    from sphfoam.models.adami import Adami
 
     case = Case(tutorial("solitaryCollision"))
     with pytest.raises(Unsupported, match="boundary 'mirrorGhosts'"):
         check_supported(selection(case))
-    with pytest.raises(Unsupported, match="velocityCorrection 'xsph'"):
-        check_supported(selection(case))
+    # a model's hooks without their declared forms: refused, naming the hooks
+    sel = selection(Case(tutorial("damBreak", {
+        "constant/sphProperties:boundary": {"type": "adami"}})))
+    check_supported(sel)
+    monkeypatch.setattr(Adami, "device_forms", lambda self: ())
+    with pytest.raises(Unsupported, match=r"boundary 'adami': its run-time hooks \(attach, "
+                       r"before_evaluation, walls_moved, after_step\)"):
+        check_supported(sel)
+
+
+def test_models_with_declared_hook_forms_are_not_refused(tutorial):
+    from sphfoam.assemble import selection
+    from sphfoam.case.case import Case
+    from sphfoam.engine.cuda.build import refusals
+
+    for shifting in ("deltaPlusShifting", "lindShifting"):
+        sel = selection(Case(tutorial("damBreak", {
+            "constant/sphProperties:velocityCorrection": {"type": "xsph"},
+            "constant/sphProperties:particleShifting": {
+                "type": shifting, "correctVelocity": "yes", "correctDensity": "yes",
+                "correctMass": "yes"}})))
+        assert sel.particleShifting.implements("after_step")
+        assert refusals(sel) == []
+    sel = selection(Case(tutorial("damBreak", {
+        "constant/sphProperties:boundary": {"type": "adami", "noSlip": "no"}})))
+    assert refusals(sel) == []
+    sel = selection(Case(tutorial("turbulentChannel")))
+    assert sel.turbulence.name == "mixingLength" and sel.turbulence.implements("attach")
+    assert refusals(sel) == []
 
 
 def test_backend_is_a_checked_schemes_entry(tutorial):
@@ -150,3 +264,32 @@ def test_a_3d_case_is_served_and_a_motion_with_no_3d_form_is_refused_by_name(tut
                                       "table": [(0.0, (0.0, 0.0)), (1.0, (0.1, 0.0))]})
     with pytest.raises(Unsupported, match="motion 'displacementTable': no 3-D form"):
         check_supported(sel, {1: table})
+
+
+def test_declared_forms_stand_for_hooks_the_model_implements():
+    """A form runs on the device only what the model's own hooks do on the host: every hook
+    a declared form stands for is one the model implements (with every correction of the
+    shiftings on and off, the mixing length with and without a wall law)."""
+    from sphfoam import registry
+    from sphfoam.engine.cuda.build import _HOOKS
+    from sphfoam.engine.hookforms import device_forms, uncovered
+
+    variants = {"particleShifting": [{}, {"correctVelocity": True},
+                                     {"correctDensity": True, "correctMass": True}],
+                "turbulence": [{}, {"wallLaw": "smooth"}]}
+    declared = set()
+    for family, models in registry.families().items():
+        for name, cls in models.items():
+            for extra in variants.get(family, [{}]):
+                try:
+                    m = registry.build(family, {"type": name, **extra})
+                except Exception:  # noqa: BLE001  (a model that needs coefficients)
+                    continue
+                forms = device_forms(m)
+                for f in forms:
+                    for h in f.hooks:
+                        assert m.implements(h), (family, name, extra, f, h)
+                if forms:
+                    declared.add(name)
+                    assert uncovered(m, _HOOKS) == [], (family, name, extra)
+    assert {"xsph", "deltaPlusShifting", "lindShifting", "mixingLength", "adami"} <= declared

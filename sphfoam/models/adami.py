@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
+from sphfoam.engine.hookforms import WallVelocity
 from sphfoam.engine.state import WALL
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext
@@ -105,6 +106,10 @@ class Adami(Boundary):
                      dims=(2, 3) if self.coeffs.noSlip else (2,))]   # (2-D wall normals)
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
+    def device_forms(self):
+        """The hooks below, declared: the prescribed wall velocity put back."""
+        return (WallVelocity(),)
+
     def attach(self, run):
         """Record each wall particle's velocity as set up (zero, or a wall entry's constant
         ``velocity``), by particle id: the prescribed velocity of walls without a motion."""

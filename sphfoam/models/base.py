@@ -54,6 +54,10 @@ the walls; never the simulation itself:
                                    applied in selection order, each to the previous one's
                                    result (XSPH's v + dv, then a shifting's + delta_u)
 ``summary()``                      a line for the end of the run's log ("" for none)
+
+A model may also declare its hooks as data, :meth:`~PipelineModel.device_forms`
+(:mod:`sphfoam.engine.hookforms`), for a backend whose arrays live on a device; a hook with
+no declared form keeps the model off such a backend.
 """
 
 from __future__ import annotations
@@ -97,6 +101,11 @@ class PipelineModel(Model):
 
     def params(self, ctx: CaseContext) -> dict[str, float]:
         return {}
+
+    def device_forms(self) -> tuple:
+        """Its run-time hooks as declared forms (:mod:`sphfoam.engine.hookforms`), run by a
+        backend whose arrays live on a device in place of the hooks (none by default)."""
+        return ()
 
     def implements(self, hook: str) -> bool:
         """Whether this model implements the run-time hook ``hook``."""

@@ -13,7 +13,9 @@ from numba import njit, prange
 from pydantic import Field
 
 from sphfoam.engine.fastmath import FASTMATH
+from sphfoam.engine.hookforms import AdvectionCorrection
 from sphfoam.engine.state import kept_arrays
+from sphfoam.engine.stepping import components
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
@@ -131,11 +133,16 @@ U@c_ab = U@_ab + aux[I_xsph_dU@, a] - aux[I_xsph_dU@, b]
 
     #: the advection hook is written for any dimension (the velocity's components)
     hook_dims = (2, 3)
+    #: positions move with v_a + dv_a, T(3.62): the hook below, declared
+    _ADVECTION = AdvectionCorrection("xsph_dU@")
+
+    def device_forms(self):
+        return (self._ADVECTION,)
 
     def advection_velocity(self, run, *U):
         """Positions move with v_a + dv_a of the last pre-pass, T(3.62) (walls: their own);
         ``U`` the velocity's components (u, v) or (u, v, w)."""
-        dU = [run.aux(f"xsph_d{c}") for c in "uvw"[:len(U)]]
+        dU = [run.aux(k) for k in components(self._ADVECTION.aux, len(U))]
         return corrected_velocity(self, run, U, dU)
 
 

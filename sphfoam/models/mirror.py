@@ -182,28 +182,33 @@ def dormant_ghost_near_fluid(x, y, kind, gidx, active, nb_start, nb_idx, support
     return bad > 0
 
 
+@njit(cache=True, inline="always")     # no fast-math: it compares with inf
+def nearest_line_distance(xa, ya, seg):
+    """Signed distance of the point (xa, ya) to the nearest wall line, positive on the fluid
+    side: the segment nearest in Euclidean distance (its end points included), then
+    n . (x - p0) with its normal n into the fluid; +inf with no segments. ``seg`` is the
+    (S, 9) array of :func:`segment_array` (p0x, p0y, tx, ty, nx, ny, L, ...). A scalar
+    function: :func:`line_distance` on the host and a device kernel share it."""
+    best = math.inf
+    sd = math.inf
+    for s in range(seg.shape[0]):
+        rx = xa - seg[s, 0]
+        ry = ya - seg[s, 1]
+        t = min(max(rx * seg[s, 2] + ry * seg[s, 3], 0.0), seg[s, 6])
+        ex = rx - t * seg[s, 2]
+        ey = ry - t * seg[s, 3]
+        d = ex * ex + ey * ey
+        if d < best:
+            best = d
+            sd = rx * seg[s, 4] + ry * seg[s, 5]
+    return sd
+
+
 @njit(cache=True)           # no fast-math: it compares with inf
 def line_distance(x, y, seg, out):
-    """Signed distance of each point to the nearest wall line, positive on the fluid side:
-    the segment nearest in Euclidean distance (its end points included), then n . (x - p0)
-    with its normal n into the fluid. ``seg`` is the (S, 9) array of
-    :func:`segment_array` (p0x, p0y, tx, ty, nx, ny, L, ...); with no
-    segments every distance is +inf."""
+    """out[i] = :func:`nearest_line_distance` of point i (x[i], y[i])."""
     for i in range(x.shape[0]):
-        best = math.inf
-        sd = math.inf
-        for s in range(seg.shape[0]):
-            rx = x[i] - seg[s, 0]
-            ry = y[i] - seg[s, 1]
-            t = min(max(rx * seg[s, 2] + ry * seg[s, 3], 0.0), seg[s, 6])
-            ex = rx - t * seg[s, 2]
-            ey = ry - t * seg[s, 3]
-            d = ex * ex + ey * ey
-            if d < best:
-                best = d
-                sd = rx * seg[s, 4] + ry * seg[s, 5]
-        out[i] = sd
-
+        out[i] = nearest_line_distance(x[i], y[i], seg)
 
 
 def segment_array(segments, offsets=None, velocities=None) -> np.ndarray:

@@ -91,6 +91,8 @@ from numba import njit, prange
 from pydantic import Field, model_validator
 
 from sphfoam.engine.fastmath import FASTMATH
+from sphfoam.engine.hookforms import AdvectionCorrection, AuxAddition
+from sphfoam.engine.stepping import components
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.models.corrections import add_rate, corrected_velocity
@@ -494,10 +496,25 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
         c = self.coeffs
         return c.surfaceR is not None and c.surfaceR != c.R
 
+    #: the hooks below, declared (``device_forms``): positions move with U + delta_u; the
+    #: corrections' rates (delta_u . grad) u and delta_u . grad rho; the mass flux's dt dm/dt
+    _ADVECTION = AdvectionCorrection("shift_dU@")
+    _VELOCITY_RATE = AuxAddition("after_rates", "a@", "shift_a@")
+    _DENSITY_RATE = AuxAddition("after_rates", "drho", "shift_drho")
+    _DENSITY_ONLY_RATE = AuxAddition("after_density_rate", "drho", "shift_drho")
+    _MASS = AuxAddition("after_step", "m", "shift_mdot", fluid_only=True)
+
+    def device_forms(self):
+        c = self.coeffs
+        return ((self._ADVECTION,)
+                + ((self._VELOCITY_RATE,) if c.correctVelocity else ())
+                + ((self._DENSITY_RATE, self._DENSITY_ONLY_RATE) if c.correctDensity else ())
+                + ((self._MASS,) if c.correctMass else ()))
+
     def advection_velocity(self, run, *U):
         """Positions move with U + delta_u of the last pre-pass (walls: unchanged); ``U`` the
         velocity's components (u, v) or (u, v, w)."""
-        dU = [run.aux(f"shift_d{c}") for c in "uvw"[:len(U)]]
+        dU = [run.aux(k) for k in components(self._ADVECTION.aux, len(U))]
         return corrected_velocity(self, run, U, dU)
 
     # the corrections' hooks exist only where they are selected (a model the case does not
@@ -518,7 +535,7 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
     def _carry_mass(self, run):
         """With ``correctMass``: m_a += dt dm_a/dt, the mass flux of the step's last rates
         evaluation over the step just taken (zero for walls)."""
-        add_mass(run.state.m, run.aux("shift_mdot"), run.state.kind, run.last_dt)
+        add_mass(run.state.m, run.aux(self._MASS.aux), run.state.kind, run.last_dt)
 
     def _add_rates(self, run):
         """With ``correctVelocity``: du_a/dt += (delta_u_a . grad) u_a; with
@@ -526,15 +543,16 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
         evaluation (zero for walls)."""
         st = run.state
         if self.coeffs.correctVelocity:
-            for acc, c in zip(st.accelerations, "xyz"):
-                add_rate(acc, run.aux(f"shift_a{c}"))
+            for acc, k in zip(st.accelerations,
+                              components(self._VELOCITY_RATE.aux, len(st.accelerations))):
+                add_rate(acc, run.aux(k))
         if self.coeffs.correctDensity:
-            add_rate(st.drho, run.aux("shift_drho"))
+            add_rate(st.drho, run.aux(self._DENSITY_RATE.aux))
 
     def _add_density_rate(self, run):
         """With ``correctDensity``: the density-only pass gets delta_u . grad rho too, from
         the last pre-pass (whose delta_u moved the particles since)."""
-        add_rate(run.state.drho, run.aux("shift_drho"))
+        add_rate(run.state.drho, run.aux(self._DENSITY_ONLY_RATE.aux))
 
 
 @register

@@ -13,10 +13,11 @@ from pydantic import Field, model_validator
 
 import sphfoam.registry as registry
 from sphfoam.case.errors import CaseError
+from sphfoam.engine.hookforms import WallField
 from sphfoam.engine.terms import Term
 from sphfoam.models import walllaw as wl
 from sphfoam.models.base import PipelineModel
-from sphfoam.models.mirror import line_distance, segment_array
+from sphfoam.models.mirror import line_distance, nearest_line_distance, segment_array
 from sphfoam.models.viscosity import velocity_gradient_term
 from sphfoam.registry import Coeffs, register
 
@@ -239,6 +240,14 @@ def _wall_law_boundary(bnd) -> bool:
     return bnd.wall_placement != "none" and "wetWall" in bnd.neighbour_kinds()
 
 
+def _needs_walls(segments) -> None:
+    """The mixing length is measured from the walls: a case without any is refused."""
+    if not segments:
+        raise CaseError.single("system/particleDict", "walls",
+                               "turbulence mixingLength measures its mixing length from the "
+                               "walls, and there are none")
+
+
 @register
 class MixingLength(SmagorinskySPS):
     """Prandtl's mixing-length eddy viscosity for wall-bounded flows, nu_t = l_m^2 |S|.
@@ -353,11 +362,15 @@ if ml_det > 0.1:                                   # grad v = G L^-1 (exact for 
         return {**out, **self.wall_law_params(ctx)}
 
     # --- run-time hooks: the wall distance of the moved particles ----------------------------
+    #: the hooks below, declared (``device_forms``): lineDist from the walls' segments
+    _LINE_DIST = WallField("lineDist", nearest_line_distance, segment_array,
+                           check=_needs_walls)
+
+    def device_forms(self):
+        return (self._LINE_DIST,)
+
     def attach(self, run):
-        if not run.segments:
-            raise CaseError.single("system/particleDict", "walls",
-                                   "turbulence mixingLength measures its mixing length from "
-                                   "the walls, and there are none")
+        _needs_walls(run.segments)
         self._seg = segment_array(run.segments)
         self._update(run)
 
@@ -372,4 +385,4 @@ if ml_det > 0.1:                                   # grad v = G L^-1 (exact for 
 
     def _update(self, run):
         st = run.state
-        line_distance(st.x, st.y, self._seg, st.extra["lineDist"])
+        line_distance(st.x, st.y, self._seg, st.extra[self._LINE_DIST.field])

@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 
 from sphfoam.engine.generated import load_generated
+from sphfoam.engine.hookforms import uncovered
 from sphfoam.engine.plan import Selection, core_parameters, missing_dimension
 
 #: the core coefficients every pipeline reads first (the same slots as the CPU's; "gz" too
@@ -16,7 +17,8 @@ from sphfoam.engine.plan import Selection, core_parameters, missing_dimension
 CORE = ("h", "inv_h", "support2", "eta2", "gx", "gy")
 
 #: the run-time hooks (``sphfoam.models.base.HOOK_NAMES``): Python between stages on host
-#: arrays, which the device runtime does not run
+#: arrays, which the device runtime runs only in their declared forms
+#: (``sphfoam.engine.hookforms``, :mod:`sphfoam.engine.cuda.hooks`)
 _HOOKS = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
           "before_evaluation", "after_rates", "after_density_rate", "walls_moved",
           "after_step", "advection_velocity", "summary")
@@ -34,10 +36,10 @@ def refusals(sel: Selection, motions=None) -> list[str]:
         if why is not None:
             out.append(why)
             continue
-        hooks = [h for h in _HOOKS if m.implements(h)]
+        hooks = uncovered(m, _HOOKS)
         if hooks:
             out.append(f"{m.family} {m.name!r}: its run-time hooks ({', '.join(hooks)}) run "
-                       "on host arrays")
+                       "on host arrays (no device form)")
     for m in (motions or {}).values():
         if sel.dim not in getattr(m, "dims", (2,)):
             out.append(f"motion {m.name!r}: no {sel.dim}-D form")

@@ -198,6 +198,10 @@ class CudaSimulation:
         #: good state is kept there (``keep_snapshot``)
         self._health = None
         self._snapshot_calls = 0
+        #: the selected models' run-time hooks in their declared forms (attached here)
+        from sphfoam.engine.cuda.hooks import DeviceHooks
+
+        self.hooks = DeviceHooks(self)
 
     # --- host <-> device ------------------------------------------------------------------
     def _to(self, a, dtype):
@@ -346,6 +350,7 @@ class CudaSimulation:
         if self._list_still_valid():
             self.list_reused += 1
             return
+        self.hooks.before_neighbours()
         cu, D, cl, d = self.cuda, self.D, self.cells, self.d
         n = self.n
         ncells = cl.ncells
@@ -450,11 +455,13 @@ class CudaSimulation:
             self._timed("prepass", self._launch, getattr(m, f"prepass_{i}"), self.n, *args)
 
     def eos(self):
+        self.hooks.before_evaluation()
         d = self.d
         self._timed("eos", self._launch, self.module.equation_of_state, self.n, d["rho"],
                     d["p"], d["c"], self.d_prm)
 
     def rates(self):
+        self.hooks.before_evaluation()
         args = self._args()
         self._prepass(args)
         sigma = True
@@ -465,12 +472,15 @@ class CudaSimulation:
         d = self.d
         self._timed("rates", self._launch, self.module.rates, self.n, *args,
                     *(d[f"a{ax}"] for ax in self._f8), d["drho"], d["sigma"], sigma)
+        self.hooks.run("after_rates")
 
     def density_rate(self):
+        self.hooks.before_evaluation()
         args = self._args()
         self._prepass(args, "density")
         self._timed("density", self._launch, self.module.density_rate, self.n, *args,
                     self.d["drho"])
+        self.hooks.run("after_density_rate")
 
     def step_pass(self):
         if getattr(self.module, "HAS_STEP", False):
@@ -500,8 +510,10 @@ class CudaSimulation:
         return min(self.beta * dmin, self.max_delta_t, self.model_dt_limit)
 
     def advect(self):
-        """No advection model has a device form yet: positions move with the velocity."""
-        self._pU = tuple(self.d[vel] for _, vel in components_of(self.dim))
+        """The velocity positions move with: the velocity, or the selected models' declared
+        corrections of it (XSPH, a shifting), in selection order."""
+        U = tuple(self.d[vel] for _, vel in components_of(self.dim))
+        self._pU = self.hooks.advection_velocity(U)
 
     def _extra(self, k):
         return self.d_extra[k] if k in self.d_extra else \
@@ -510,8 +522,12 @@ class CudaSimulation:
     def move_walls(self, t: float):
         """Every wall with a prescribed motion where it is at time ``t`` (a kernel over the
         particles of each wall entry: r = r0 + d(t), v = d'(t))."""
-        if not self.motions or "patch" not in self.d_extra and \
-                "patch" not in self.module.FIELDS:
+        if not self.motions:
+            return
+        self.hooks.walls_moved({w: m.displacement(t) for w, m in self.motions.items()},
+                               {w: m.velocity(t) for w, m in self.motions.items()})
+        self.hooks.before_evaluation()
+        if "patch" not in self.d_extra and "patch" not in self.module.FIELDS:
             return
         d = self.d
         z, w, three = self._third("z", "w")
@@ -602,5 +618,6 @@ class CudaSimulation:
     def step(self, dt_remaining: float = math.inf) -> float:
         """Re-sort, filter the density when due, then one step of the integrator."""
         dt = advance(self, dt_remaining)
+        self.hooks.run("after_step", self.last_dt)
         self._dirty = True
         return dt
