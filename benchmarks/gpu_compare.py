@@ -38,13 +38,22 @@ CASES = [
     ("solitaryWave", "solitaryWave", 0.1, 300, {}),
     ("couette", "couette", None, 300, {}),
     ("poiseuille", "poiseuille", None, 300, {}),
-    ("turbulentChannel", "turbulentChannel", 0.05, 300, {}),
+    ("turbulentChannel", "turbulentChannel", None, 300, {}),
+    # the hooks' declared forms together: Adami's walls, XSPH, delta+ shifting with its
+    # velocity, density and mass corrections (surfaceLambda 0: see tests/test_cuda_backend)
+    ("adami + xsph + deltaPlusShifting", "damBreakMatched", 0.04, 300, {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
+        "constant/sphProperties:boundary": {"type": "adami"},
+        "constant/sphProperties:velocityCorrection": {"type": "xsph"},
+        "constant/sphProperties:particleShifting": {
+            "type": "deltaPlusShifting", "surfaceLambda": 0, "correctVelocity": "yes",
+            "correctDensity": "yes", "correctMass": "yes"}}),
     ("solitaryBeach", "solitaryBeach", 0.05, 300, {}),
     ("solitaryCollision", "solitaryCollision", 1.25, 300, {}),
     ("solitaryWallRunup", "solitaryWallRunup", 1.25, 300, {}),
     ("hydrostaticTank3D", "hydrostaticTank3D", 0.05, 200, {}),
-    ("damBreak3D", "damBreak3D", 0.11, 200, {}),
-    ("solitaryWave3D", "solitaryWave3D", 0.125, 200, {}),
+    ("damBreak3D", "damBreak3D", 0.1, 200, {}),
+    ("solitaryWave3D", "solitaryWave3D", 0.05, 100, {}),
 ]
 
 
