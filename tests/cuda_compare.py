@@ -20,8 +20,10 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _fields(sim):
+    """x, y, u, v, rho of the particles (ids >= 0: ghosts are no particles) by id."""
     st = sim.state
     order = np.argsort(st.id, kind="stable")
+    order = order[st.id[order] >= 0]
     return {k: np.asarray(getattr(st, k), dtype=np.float64)[order]
             for k in ("x", "y", "u", "v", "rho")}, st.id[order]
 

@@ -16,9 +16,10 @@ import time as _time
 import numpy as np
 
 from sphfoam.engine.cuda import cuda_module
+from sphfoam.engine.cuda.forms import device_forms
 from sphfoam.engine.neighbours import CellList
 from sphfoam.engine.schedule import Schedule
-from sphfoam.engine.state import FLUID, ParticleState
+from sphfoam.engine.state import FLUID, GHOST, ParticleState
 from sphfoam.engine.stepping import StepContext, advance, components, field_components
 
 #: steps between the time loop's health checks (the state copied back for them)
@@ -140,6 +141,11 @@ class CudaSimulation:
         #: HEALTH_EVERY steps here, not every step (a blow-up is then caught up to that many
         #: steps late; the checks have no device form yet)
         self.health_schedule = Schedule("timeStep", HEALTH_EVERY)
+        #: the device forms of the selected models' run-time hooks
+        #: (:mod:`sphfoam.engine.cuda.forms`), called at the same points as on the CPU
+        self.forms = device_forms(sel)
+        for form in self.forms:
+            form.attach(self)
 
     # --- host <-> device ------------------------------------------------------------------
     def _to(self, a, dtype):
@@ -197,7 +203,37 @@ class CudaSimulation:
         return self._get(self.d["p"])
 
     def summary(self) -> str:
-        return ""
+        """What the selected models' device forms report at the end of a run."""
+        return "; ".join(x for x in (f.summary() for f in self.forms
+                                     if hasattr(f, "summary")) if x)
+
+    # --- the models' device forms ---------------------------------------------------------
+    def _forms(self, name: str, *args):
+        """Call ``name`` of every device form that has it."""
+        for form in self.forms:
+            fn = getattr(form, name, None)
+            if fn is not None:
+                fn(self, *args)
+
+    def append(self, k: int) -> int:
+        """``k`` particles more at the end of every device array (zeros: the caller fills
+        them, e.g. mirror ghosts); returns the index of the first."""
+        cu, D, n0 = self.cuda, self.D, self.n
+        n1 = n0 + int(k)
+
+        def grown(a):
+            out = cu.device_array((a.shape[0], n1) if a.ndim == 2 else n1, dtype=a.dtype)
+            self._launch(D.extend_rows if a.ndim == 2 else D.extend, n1, a, out)
+            return out
+
+        for key in list(self.d):
+            self.d[key] = grown(self.d[key])
+        for key in list(self.d_extra):
+            dict.__setitem__(self.d_extra, key, grown(self.d_extra[key]))
+        self.d_fld = grown(self.d_fld)
+        self.n = n1
+        self._dirty = True
+        return n0
 
     def invalidate_neighbours(self):
         self._ref = None
@@ -241,7 +277,10 @@ class CudaSimulation:
         d2, v2, out = self._get(self._red)
         if out:
             return False
-        return math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt < 0.5 * self.skin
+        if not math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt < 0.5 * self.skin:
+            return False
+        # a device form that adds particles says whether they still serve
+        return all(f.keeps_neighbours(self) for f in self.forms if hasattr(f, "add_particles"))
 
     def neighbour_update(self):
         """The neighbour update of this step, timed (``_timed``)."""
@@ -260,6 +299,10 @@ class CudaSimulation:
         counts = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
         self._launch(D.bin_particles, n, d["x"], d["y"], cl.x0, cl.y0, 1.0 / cl.cell_size,
                      cl.ncx, cl.ncy, cl.lx, cl.ly, cell, counts)
+        for form in self.forms:
+            if hasattr(form, "add_particles"):
+                cell = form.add_particles(self, cell, counts)
+        n = self.n
         start = cu.device_array(ncells + 2, dtype=np.int64)
         self._scan_scratch = D.exclusive_scan(counts, start, self._scan_scratch)
         fill = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
@@ -284,6 +327,7 @@ class CudaSimulation:
             self.d_fld = out
         if kept < n:
             self._remove(kept)
+        self._forms("after_sort", order)
         self.cell_start = start[:ncells + 1]
         n = self.n
         count = cu.device_array(n, dtype=np.int64)
@@ -310,16 +354,20 @@ class CudaSimulation:
         self._dirty = True
 
     def _remove(self, kept: int):
-        """Particles binned outside the box (sorted last) leave the simulation."""
+        """Particles binned outside the box (sorted last) leave the simulation; ghosts
+        there (a device form's) are dropped without a report."""
         from sphfoam.engine.simulation import Removal
 
         d = self.d
-        ids = self._get(d["id"][kept:])
-        where = np.column_stack([self._get(d["x"][kept:]), self._get(d["y"][kept:])])
-        rem = Removal(self.time, int(ids.shape[0]), ids, where)
-        self.removals.append(rem)
-        if self.on_removal:
-            self.on_removal(rem)
+        real = self._get(d["kind"][kept:]) != GHOST
+        if real.any():
+            ids = self._get(d["id"][kept:])[real]
+            where = np.column_stack([self._get(d["x"][kept:])[real],
+                                     self._get(d["y"][kept:])[real]])
+            rem = Removal(self.time, int(ids.shape[0]), ids, where)
+            self.removals.append(rem)
+            if self.on_removal:
+                self.on_removal(rem)
         for k in list(d):
             d[k] = d[k][:kept]
         for k in list(self.d_extra):
@@ -358,11 +406,13 @@ class CudaSimulation:
             self._timed("prepass", self._launch, getattr(m, f"prepass_{i}"), self.n, *args)
 
     def eos(self):
+        self._forms("before_evaluation")
         d = self.d
         self._timed("eos", self._launch, self.module.equation_of_state, self.n, d["rho"],
                     d["p"], d["c"], self.d_prm)
 
     def rates(self):
+        self._forms("before_evaluation")
         args = self._args()
         self._prepass(args)
         sigma = True
@@ -373,8 +423,10 @@ class CudaSimulation:
         d = self.d
         self._timed("rates", self._launch, self.module.rates, self.n, *args, d["ax"], d["ay"],
                     d["drho"], d["sigma"], sigma)
+        self._forms("after_rates")
 
     def density_rate(self):
+        self._forms("before_evaluation")
         args = self._args()
         self._prepass(args, "density")
         self._timed("density", self._launch, self.module.density_rate, self.n, *args,
@@ -416,17 +468,24 @@ class CudaSimulation:
 
     def move_walls(self, t: float):
         """Every wall with a prescribed motion where it is at time ``t`` (a kernel over the
-        particles of each wall entry: r = r0 + d(t), v = d'(t))."""
-        if not self.motions or "patch" not in self.d_extra and \
-                "patch" not in self.module.FIELDS:
+        particles of each wall entry: r = r0 + d(t), v = d'(t)); then the device forms that
+        follow walls (``walls_moved``) and ``before_evaluation``, as on the CPU."""
+        if not self.motions:
             return
+        patch = "patch" in self.d_extra or "patch" in self.module.FIELDS
         d = self.d
+        offs, vels = {}, {}
         for which, mot in self.motions.items():
-            (ox, oy), (uu, vv) = mot.displacement(t), mot.velocity(t)
-            self._timed("walls", self._launch, self.D.prescribe_patch, self.n, d["x"], d["y"],
-                        d["u"], d["v"], self._extra("patch"), self._extra("x0"),
-                        self._extra("y0"), float(which), float(ox), float(oy), float(uu),
-                        float(vv))
+            off, vel = mot.displacement(t), mot.velocity(t)
+            (ox, oy), (uu, vv) = off, vel
+            if patch:
+                self._timed("walls", self._launch, self.D.prescribe_patch, self.n, d["x"],
+                            d["y"], d["u"], d["v"], self._extra("patch"), self._extra("x0"),
+                            self._extra("y0"), float(which), float(ox), float(oy),
+                            float(uu), float(vv))
+            offs[which], vels[which] = off, vel
+        self._forms("walls_moved", offs, vels)
+        self._forms("before_evaluation")
 
     # --- the integrator's updates ---------------------------------------------------------
     def run_update(self, name: str, scalars: dict):
@@ -478,5 +537,6 @@ class CudaSimulation:
     def step(self, dt_remaining: float = math.inf) -> float:
         """Re-sort, filter the density when due, then one step of the integrator."""
         dt = advance(self, dt_remaining)
+        self._forms("after_step")
         self._dirty = True
         return dt
