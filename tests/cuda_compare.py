@@ -61,6 +61,11 @@ def compare(src: Path, edits: dict, steps: int) -> dict:
             res["rel"][k] = float(np.max(np.abs(a[k] - b[k]))) / scale if res["same_ids"] \
                 else float("inf")
         res["dt_rel"] = abs(res["time_cpu"] - res["time_cuda"]) / max(res["time_cpu"], 1e-300)
+        # lists built and reused, ghosts (kind 2) now, the models' summaries: per backend
+        for k, get in (("built", lambda s: s.list_built), ("reused", lambda s: s.list_reused),
+                       ("ghosts", lambda s: int((s.state.kind == 2).sum())),
+                       ("summary", lambda s: s.summary())):
+            res[k] = [get(sims["cpu"]), get(sims["cuda"])]
     return res
 
 
