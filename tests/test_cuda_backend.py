@@ -82,6 +82,17 @@ def test_mirror_ghosts_match_cpu_under_the_simulator():
     assert res["summary"][0] == res["summary"][1], res
 
 
+def test_free_slip_mirror_ghosts_match_cpu_under_the_simulator():
+    """solitaryWallRunup's mirrorGhosts (free slip, p_G = p_a: T(3.77)-(3.80) as printed) at
+    dx = 5 m (104 particles, 136 ghosts), its XSPH left out (velocityCorrection none): one
+    build, then the list kept for three steps."""
+    res = _compare("solitaryWallRunup", 5.0, 4,
+                   {"constant/sphProperties:velocityCorrection": {"type": "none"}})
+    _assert_matches(res)
+    assert res["built"] == [1, 1] and res["reused"] == [3, 3], res
+    assert res["ghosts"][0] == res["ghosts"][1] > 0, res
+
+
 @_SLOW
 def test_mirror_ghosts_outside_the_grid_are_dropped_as_on_the_cpu():
     """A box that cuts the ghosts below the bed: they are dropped at each build, not

@@ -183,7 +183,8 @@ def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip, active,
 def ghost_on(xa, ya, seg, s1, s2, reach):
     """Whether particle (xa, ya) still makes its ghost across ``s1`` (and ``s2`` >= 0): within
     ``reach`` of the segment(s), projecting onto them (the criterion of T(3.77))."""
-    return _near(xa, ya, seg, s1, reach) and (s2 < 0 or _near(xa, ya, seg, s2, reach))
+    return _near(xa, ya, seg, s1, reach, 0.0) and \
+        (s2 < 0 or _near(xa, ya, seg, s2, reach, 0.0))
 
 
 @njit(parallel=True, **_JIT)
