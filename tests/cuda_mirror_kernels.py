@@ -1,4 +1,4 @@
-"""The kernels of the mirror ghosts' device form (sphfoam.engine.cuda.mirror) against the
+"""The kernels of the mirror ghosts' device form (sphfoam.models.mirror_cuda) against the
 CPU's loops (sphfoam.models.mirror) on made-up particles near two moving walls that meet in
 a corner: the count and table of ghosts, their state (free slip and no-slip, p_G = p_a and
 hydrostatic), their activity, the push-back and the wall shear of each law. Prints one JSON
@@ -29,7 +29,7 @@ def _same(a, b) -> float:
 def main() -> dict:
     from numba import cuda
 
-    from sphfoam.engine.cuda import mirror as dm
+    from sphfoam.models import mirror_cuda as dm
     from sphfoam.engine.cuda.device import THREADS, blocks
     from sphfoam.models import mirror as gh
 

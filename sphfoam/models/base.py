@@ -54,9 +54,16 @@ the walls; never the simulation itself:
                                    applied in selection order, each to the previous one's
                                    result (XSPH's v + dv, then a shifting's + delta_u)
 ``summary()``                      a line for the end of the run's log ("" for none)
+
+On the CUDA backend the hooks run only through a model's *device form*
+(:mod:`sphfoam.engine.cuda.forms`): ``device_form`` names its class ("module:Class") and
+``device_hooks`` the hooks it stands for; a model with a hook none stands for is refused
+there by name.
 """
 
 from __future__ import annotations
+
+from typing import ClassVar
 
 from sphfoam.context import CaseContext
 from sphfoam.engine.terms import Term
@@ -77,6 +84,10 @@ class PipelineModel(Model):
     prefix: str = ""
     #: per-particle fields the set-up writes and the code reads as ``fld[F_<name>, i]``
     particle_fields: tuple[str, ...] = ()
+    #: the device form of the run-time hooks, "module:Class" (:mod:`sphfoam.engine.cuda.
+    #: forms`), and the hooks it stands for
+    device_form: ClassVar[str] = ""
+    device_hooks: ClassVar[tuple[str, ...]] = ()
 
     def terms(self) -> list[Term]:
         return []

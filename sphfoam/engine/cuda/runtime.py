@@ -16,6 +16,7 @@ import time as _time
 import numpy as np
 
 from sphfoam.engine.cuda import cuda_module
+from sphfoam.engine.cuda.context import DeviceContext
 from sphfoam.engine.cuda.forms import device_forms
 from sphfoam.engine.neighbours import CellList
 from sphfoam.engine.schedule import Schedule
@@ -144,8 +145,10 @@ class CudaSimulation:
         #: the device forms of the selected models' run-time hooks
         #: (:mod:`sphfoam.engine.cuda.forms`), called at the same points as on the CPU
         self.forms = device_forms(sel)
+        #: what the device forms see of this simulation
+        self.context = DeviceContext(self)
         for form in self.forms:
-            form.attach(self)
+            form.attach(self.context)
 
     # --- host <-> device ------------------------------------------------------------------
     def _to(self, a, dtype):
@@ -213,7 +216,7 @@ class CudaSimulation:
         for form in self.forms:
             fn = getattr(form, name, None)
             if fn is not None:
-                fn(self, *args)
+                fn(self.context, *args)
 
     def append(self, k: int) -> int:
         """``k`` particles more at the end of every device array (zeros: the caller fills
@@ -280,7 +283,8 @@ class CudaSimulation:
         if not math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt < 0.5 * self.skin:
             return False
         # a device form that adds particles says whether they still serve
-        return all(f.keeps_neighbours(self) for f in self.forms if hasattr(f, "add_particles"))
+        return all(f.keeps_neighbours(self.context) for f in self.forms
+                   if hasattr(f, "add_particles"))
 
     def neighbour_update(self):
         """The neighbour update of this step, timed (``_timed``)."""
@@ -301,7 +305,7 @@ class CudaSimulation:
                      cl.ncx, cl.ncy, cl.lx, cl.ly, cell, counts)
         for form in self.forms:
             if hasattr(form, "add_particles"):
-                cell = form.add_particles(self, cell, counts)
+                cell = form.add_particles(self.context, cell, counts)
         n = self.n
         start = cu.device_array(ncells + 2, dtype=np.int64)
         self._scan_scratch = D.exclusive_scan(counts, start, self._scan_scratch)

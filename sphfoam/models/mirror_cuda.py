@@ -1,5 +1,7 @@
 """The device form of the ``mirrorGhosts`` boundary (:class:`sphfoam.models.boundaries.
-MirrorGhosts`): mirrored ghost particles, T(3.77)-(3.80), on device arrays.
+MirrorGhosts`, ``device_form``): mirrored ghost particles, T(3.77)-(3.80), on the CUDA
+backend's device arrays (:mod:`sphfoam.engine.cuda.forms`; imported only there, once
+numba.cuda can run).
 
 The same sequence as the model's hooks on the CPU, with the same per-particle arithmetic:
 the kernels call the scalar functions of :mod:`sphfoam.models.mirror` (``ghosts_of``,
@@ -32,7 +34,7 @@ import copy
 import numpy as np
 from numba import cuda
 
-from sphfoam.engine.context import RunContext
+from sphfoam.engine.cuda import device as D
 from sphfoam.engine.cuda.device import device_function, exclusive_scan
 from sphfoam.engine.state import GHOST
 from sphfoam.models import mirror as gh
@@ -198,11 +200,11 @@ class MirrorGhostsDevice:
     def __init__(self, model):
         self.model = model
 
-    def attach(self, sim):
+    def attach(self, run):
         host = copy.copy(self.model)
-        host.attach(RunContext(sim))
+        host.attach(run)
         self.host = host
-        cu = sim.cuda
+        cu = run.cuda
         self.reach = float(host.reach)
         self.build_reach = float(host.build_reach)
         self.margin = float(host.margin)
@@ -219,110 +221,107 @@ class MirrorGhostsDevice:
         self.d_pushed = cu.to_device(np.zeros(1, dtype=np.int64))
         self.d_counts = cu.device_array(3, dtype=np.int64)
         self._scratch = None
-        n = sim.n
+        n = run.n
         for k in TABLE:
-            sim.d[k] = cu.to_device(np.full(n, -1, dtype=np.int64) if k != "gact"
-                                    else np.zeros(n, dtype=np.uint8))
+            run.arrays[k] = cu.to_device(np.full(n, -1, dtype=np.int64) if k != "gact"
+                                         else np.zeros(n, dtype=np.uint8))
 
-    def _table(self, sim):
-        d = sim.d
+    def _table(self, run):
+        d = run.arrays
         return d["gsrc"], d["gs1"], d["gs2"], d["gact"]
 
     # --- the list build -------------------------------------------------------------------
-    def add_particles(self, sim, cell, counts):
+    def add_particles(self, run, cell, counts):
         """Retire the last build's ghosts; make, state and bin this build's (T(3.77))."""
-        cu, D, cl, d = sim.cuda, sim.D, sim.cells, sim.d
+        cu, cl, d = run.cuda, run.cells, run.arrays
         outside = cl.ncx * cl.ncy
-        n0 = sim.n
-        gsrc, gs1, gs2, gact = self._table(sim)
-        sim._launch(retire_ghosts, n0, d["kind"], gsrc, cell, counts, outside)
+        n0 = run.n
+        gsrc, gs1, gs2, gact = self._table(run)
+        run.launch(retire_ghosts, n0, d["kind"], gsrc, cell, counts, outside)
         count = cu.device_array(n0, dtype=np.int64)
-        sim._launch(count_ghosts, n0, d["x"], d["y"], d["kind"], cell, outside, self.d_seg,
-                    self.d_corners, self.build_reach, self.margin, count)
+        run.launch(count_ghosts, n0, d["x"], d["y"], d["kind"], cell, outside, self.d_seg,
+                   self.d_corners, self.build_reach, self.margin, count)
         offset = cu.device_array(n0 + 1, dtype=np.int64)
         self._scratch = exclusive_scan(count, offset, self._scratch)
-        ng = int(offset[n0])                 # the ghosts' count (one scalar)
-        sim.bytes_d2h += 8
+        ng = int(run.copy_back(offset[n0:])[0])          # the ghosts' count (one scalar)
         self.built = True
         if ng == 0:
             return cell
-        sim.append(ng)
-        gsrc, gs1, gs2, gact = self._table(sim)
-        sim._launch(fill_ghosts, n0, d["x"], d["y"], d["kind"], cell, outside, self.d_seg,
-                    self.d_corners, self.build_reach, self.margin, n0, offset, gsrc, gs1, gs2)
-        sim._launch(label_ghosts, ng, n0, d["kind"], d["id"], gsrc, gact)
-        self.before_evaluation(sim)
+        run.append(ng)
+        gsrc, gs1, gs2, gact = self._table(run)
+        run.launch(fill_ghosts, n0, d["x"], d["y"], d["kind"], cell, outside, self.d_seg,
+                   self.d_corners, self.build_reach, self.margin, n0, offset, gsrc, gs1, gs2)
+        run.launch(label_ghosts, ng, n0, d["kind"], d["id"], gsrc, gact)
+        self.before_evaluation(run)
         grown = cu.device_array(n0 + ng, dtype=np.int64)
-        sim._launch(D.extend, n0 + ng, cell, grown)
-        sim._launch(D.bin_particles, ng, d["x"][n0:], d["y"][n0:], cl.x0, cl.y0,
-                    1.0 / cl.cell_size, cl.ncx, cl.ncy, cl.lx, cl.ly, grown[n0:], counts)
+        run.launch(D.extend, n0 + ng, cell, grown)
+        run.launch(D.bin_particles, ng, d["x"][n0:], d["y"][n0:], cl.x0, cl.y0,
+                   1.0 / cl.cell_size, cl.ncx, cl.ncy, cl.lx, cl.ly, grown[n0:], counts)
         return grown
 
-    def after_sort(self, sim, order):
+    def after_sort(self, run, order):
         """The ghosts' particles by their new index; which ghosts are active; their state."""
-        inv = sim.cuda.device_array(order.shape[0], dtype=np.int64)
-        gsrc = sim.d["gsrc"]
-        sim._launch(inverse, order.shape[0], order, inv)
-        sim._launch(remap_sources, sim.n, gsrc, inv)
-        self._activity(sim)
-        self.before_evaluation(sim)
+        inv = run.cuda.device_array(order.shape[0], dtype=np.int64)
+        gsrc = run.arrays["gsrc"]
+        run.launch(inverse, order.shape[0], order, inv)
+        run.launch(remap_sources, run.n, gsrc, inv)
+        self._activity(run)
+        self.before_evaluation(run)
 
-    def _activity(self, sim):
-        d = sim.d
-        gsrc, gs1, gs2, gact = self._table(sim)
+    def _activity(self, run):
+        d = run.arrays
+        gsrc, gs1, gs2, gact = self._table(run)
         self.d_counts.copy_to_device(np.zeros(3, dtype=np.int64))
-        sim._launch(ghost_activity, sim.n, d["x"], d["y"], gsrc, gs1, gs2, self.d_seg,
-                    self.reach, gact, self.d_counts)
+        run.launch(ghost_activity, run.n, d["x"], d["y"], gsrc, gs1, gs2, self.d_seg,
+                   self.reach, gact, self.d_counts)
 
     # --- per step ---------------------------------------------------------------------------
-    def keeps_neighbours(self, sim) -> bool:
+    def keeps_neighbours(self, run) -> bool:
         """Whether the last build's ghosts still serve (``MirrorGhosts.keeps_neighbours``):
         the active ones are those a build would make and, where a selected term is not
         weighted by mass, no dormant one is within the support of a fluid particle."""
         if not self.built:
             return False
-        d = sim.d
-        self._activity(sim)
-        sim._launch(count_qualifying, sim.n, d["x"], d["y"], d["kind"], self.d_seg,
-                    self.d_corners, self.reach, self.d_counts)
-        self.before_evaluation(sim)
+        d = run.arrays
+        self._activity(run)
+        run.launch(count_qualifying, run.n, d["x"], d["y"], d["kind"], self.d_seg,
+                   self.d_corners, self.reach, self.d_counts)
+        self.before_evaluation(run)
         if self.unweighted:
-            nb_start, nb_idx = sim._nb
-            sim._launch(dormant_near_fluid, sim.n, d["x"], d["y"], d["kind"], d["gsrc"],
-                        d["gact"], nb_start, nb_idx, self.reach ** 2 * (1.0 + 1e-12),
-                        self.d_counts)
-        n_on, n_made, near = sim._get(self.d_counts)
+            nb_start, nb_idx = run.neighbours
+            run.launch(dormant_near_fluid, run.n, d["x"], d["y"], d["kind"], d["gsrc"],
+                       d["gact"], nb_start, nb_idx, self.reach ** 2 * (1.0 + 1e-12),
+                       self.d_counts)
+        n_on, n_made, near = run.copy_back(self.d_counts)
         return n_on == n_made and near == 0
 
-    def before_evaluation(self, sim):
+    def before_evaluation(self, run):
         """Every ghost from its particle's state now (dormant ones with mass 0)."""
         if not self.built:
             return
-        d = sim.d
-        gsrc, gs1, gs2, gact = self._table(sim)
-        sim._launch(refresh_ghosts, sim.n, d["x"], d["y"], d["u"], d["v"], d["rho"], d["m"],
-                    gsrc, gs1, gs2, self.d_seg, self.no_slip, gact, *self.hydro)
+        d = run.arrays
+        gsrc, gs1, gs2, gact = self._table(run)
+        run.launch(refresh_ghosts, run.n, d["x"], d["y"], d["u"], d["v"], d["rho"], d["m"],
+                   gsrc, gs1, gs2, self.d_seg, self.no_slip, gact, *self.hydro)
 
-    def after_rates(self, sim):
+    def after_rates(self, run):
         """``wallLaw``: the wall's shear stress on the fluid near it."""
         if self.shear is None:
             return
-        d = sim.d
-        sim._launch(wall_shear, sim.n, d["x"], d["y"], d["u"], d["v"], d["kind"], self.d_seg,
-                    self.reach, *self.shear, d["ax"], d["ay"])
+        d = run.arrays
+        run.launch(wall_shear, run.n, d["x"], d["y"], d["u"], d["v"], d["kind"], self.d_seg,
+                   self.reach, *self.shear, d["ax"], d["ay"])
 
-    def walls_moved(self, sim, offsets, velocities):
+    def walls_moved(self, run, offsets, velocities):
         """The segments where the walls are now (the host's few numbers, copied over)."""
-        self.host.walls_moved(RunContext(sim), offsets, velocities)
-        seg = np.ascontiguousarray(self.host.seg)
-        self.d_seg.copy_to_device(seg)
-        sim.bytes_h2d += seg.nbytes
+        self.host.walls_moved(run, offsets, velocities)
+        run.copy_in(self.d_seg, np.ascontiguousarray(self.host.seg))
 
-    def after_step(self, sim):
+    def after_step(self, run):
         """A particle that crossed a mirror wall during the step goes back."""
-        d = sim.d
-        sim._launch(push_back, sim.n, d["x"], d["y"], d["u"], d["v"], d["kind"], self.d_seg,
-                    self.reach, self.d_pushed)
+        d = run.arrays
+        run.launch(push_back, run.n, d["x"], d["y"], d["u"], d["v"], d["kind"], self.d_seg,
+                   self.reach, self.d_pushed)
 
     def summary(self) -> str:
         self.host.pushed_back = int(self.d_pushed.copy_to_host()[0])
