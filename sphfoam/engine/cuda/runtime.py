@@ -435,6 +435,7 @@ class CudaSimulation:
         self._prepass(args, "density")
         self._timed("density", self._launch, self.module.density_rate, self.n, *args,
                     self.d["drho"])
+        self._forms("after_density_rate")
 
     def step_pass(self):
         if getattr(self.module, "HAS_STEP", False):
