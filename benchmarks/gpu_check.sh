@@ -7,8 +7,9 @@
 # independent of the others' failure, everything tee'd into $OUT/*.log (total <= 6 minutes):
 #   1. nvidia-smi                                                  -> $OUT/nvidia-smi.log
 #   2. CUDA vs CPU backend on the real device (no simulator):      -> $OUT/compare.log
-#      the matched dam break and the tutorial selections the device supports, a few hundred
-#      steps at a small size (largest relative field difference per case, one JSON line each)
+#      the matched dam break and the tutorial selections the device supports (solitaryBeach:
+#      mirror ghosts with the paddle), a few hundred steps at a small size (largest relative
+#      field difference per case, one JSON line each)
 #   3. sphfoam run with backend cuda: a short matched dam break and a short solitaryWave
 #                                                                  -> $OUT/run_*.log
 #   4. benchmarks/bench_gpu.py at 23k, 400k, 4M particles          -> $OUT/bench.log,
@@ -36,6 +37,7 @@ python3 -c "from sphfoam.engine.cuda import cuda_module; c = cuda_module(); impo
 (
   timeout 80 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300
   timeout 50 python3 tests/cuda_compare.py solitaryWave --dx 0.1 --steps 200
+  timeout 120 python3 tests/cuda_compare.py solitaryBeach --dx 0.05 --steps 300
   timeout 50 python3 tests/cuda_compare.py damBreakMatched --dx 0.04 --steps 300 \
       --edits '{"system/sphSchemes:precision": "single"}'
 ) 2>&1 | tee "$OUT/compare.log"
