@@ -90,20 +90,19 @@ def fill_ghosts(x, y, kind, seg, corners, reach, offset, src, s1, s2, margin=0.0
 
 
 @njit(**_JIT, inline="always")
-def push_back_of(xa, ya, ua, va, seg, reach):
-    """(x, y, u, v, how many crossings) of one fluid particle after :func:`push_back`."""
-    count = 0
-    for s in range(seg.shape[0]):
-        t, d = _local(xa, ya, seg, s)
-        if d <= 0.0 and d > -reach and t >= 0.0 and t <= seg[s, 6]:
-            xa -= 2.0 * d * seg[s, 4]
-            ya -= 2.0 * d * seg[s, 5]
-            un = (ua - seg[s, 7]) * seg[s, 4] + (va - seg[s, 8]) * seg[s, 5]
-            if un < 0.0:
-                ua -= 2.0 * un * seg[s, 4]
-                va -= 2.0 * un * seg[s, 5]
-            count += 1
-    return xa, ya, ua, va, count
+def push_back_of(xa, ya, ua, va, seg, s, reach):
+    """(x, y, u, v, 1) of a fluid particle at (xa, ya) that crossed segment ``s`` within
+    ``reach`` behind it, reflected back with its normal velocity relative to the wall
+    reversed where it points out of the fluid; (xa, ya, ua, va, 0) otherwise."""
+    t, d = _local(xa, ya, seg, s)
+    if d <= 0.0 and d > -reach and t >= 0.0 and t <= seg[s, 6]:
+        px = xa - 2.0 * d * seg[s, 4]
+        py = ya - 2.0 * d * seg[s, 5]
+        un = (ua - seg[s, 7]) * seg[s, 4] + (va - seg[s, 8]) * seg[s, 5]
+        if un < 0.0:
+            return px, py, ua - 2.0 * un * seg[s, 4], va - 2.0 * un * seg[s, 5], 1
+        return px, py, float(ua), float(va), 1
+    return xa, ya, float(ua), float(va), 0
 
 
 @njit(parallel=True, **_JIT)
@@ -116,8 +115,14 @@ def push_back(x, y, u, v, kind, seg, reach):
     for a in prange(x.shape[0]):
         if kind[a] != 0:
             continue
-        x[a], y[a], u[a], v[a], k = push_back_of(x[a], y[a], u[a], v[a], seg, reach)
-        count += k
+        for s in range(seg.shape[0]):
+            px, py, pu, pv, k = push_back_of(x[a], y[a], u[a], v[a], seg, s, reach)
+            if k:
+                x[a] = px
+                y[a] = py
+                u[a] = pu
+                v[a] = pv
+                count += 1
     return count
 
 
@@ -297,38 +302,33 @@ assert set(WALL_SHEAR_LAWS) == set(LAWS)
 
 
 @njit(**_JIT)
-def wall_shear_of(xa, ya, ua, va, seg, reach, phi, law, coef, axa, aya):
-    """(ax_a, ay_a, how many segments) after the wall shear of :func:`wall_shear` on one fluid
-    particle: dv_a/dt += -2 Phi(d_a) u*_a^2 t_a per segment it is near."""
+def wall_shear_of(xa, ya, ua, va, seg, s, reach, phi, law, coef):
+    """(fx, fy, 1): the wall shear of segment ``s`` on a fluid particle near it,
+    dv_a/dt = -(fx, fy) = -2 Phi(d_a) u*_a^2 t_a (see :func:`wall_shear`); (0, 0, 0) where
+    the particle is not near it or does not move along it."""
+    t, d = _local(xa, ya, seg, s)
+    if not (d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]):
+        return 0.0, 0.0, 0
+    ur = ua - seg[s, 7]
+    vr = va - seg[s, 8]
+    un = ur * seg[s, 4] + vr * seg[s, 5]
+    tx = ur - un * seg[s, 4]
+    ty = vr - un * seg[s, 5]
+    ut = math.sqrt(tx * tx + ty * ty)
+    if ut <= 0.0:
+        return 0.0, 0.0, 0
+    if law == 0:
+        us = smooth_ustar(ut, d, coef)
+    elif law == 1:
+        us = rough_ustar(ut, max(d, coef), coef)
+    else:
+        us = uplus_ustar(ut, coef)
     nphi = phi.shape[0] - 1
-    scale = nphi / reach
-    count = 0
-    for s in range(seg.shape[0]):
-        t, d = _local(xa, ya, seg, s)
-        if not (d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]):
-            continue
-        ur = ua - seg[s, 7]
-        vr = va - seg[s, 8]
-        un = ur * seg[s, 4] + vr * seg[s, 5]
-        tx = ur - un * seg[s, 4]
-        ty = vr - un * seg[s, 5]
-        ut = math.sqrt(tx * tx + ty * ty)
-        if ut <= 0.0:
-            continue
-        if law == 0:
-            us = smooth_ustar(ut, d, coef)
-        elif law == 1:
-            us = rough_ustar(ut, max(d, coef), coef)
-        else:
-            us = uplus_ustar(ut, coef)
-        k = d * scale
-        i = min(int(k), nphi - 1)
-        w = phi[i] + (k - i) * (phi[i + 1] - phi[i])
-        f = 2.0 * w * us * us / ut
-        axa -= f * tx
-        aya -= f * ty
-        count += 1
-    return axa, aya, count
+    k = d * (nphi / reach)
+    i = min(int(k), nphi - 1)
+    w = phi[i] + (k - i) * (phi[i + 1] - phi[i])
+    f = 2.0 * w * us * us / ut
+    return f * tx, f * ty, 1
 
 
 @njit(parallel=True, **_JIT)
@@ -347,9 +347,12 @@ def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
     for a in prange(x.shape[0]):
         if kind[a] != 0:
             continue
-        ax[a], ay[a], k = wall_shear_of(x[a], y[a], u[a], v[a], seg, reach, phi, law, coef,
-                                        ax[a], ay[a])
-        count += k
+        for s in range(seg.shape[0]):
+            fx, fy, k = wall_shear_of(x[a], y[a], u[a], v[a], seg, s, reach, phi, law, coef)
+            if k:
+                ax[a] -= fx
+                ay[a] -= fy
+                count += 1
     return count
 
 

@@ -174,9 +174,14 @@ def push_back(x, y, u, v, kind, seg, reach, total):
     a = cuda.grid(1)
     if a >= x.shape[0] or kind[a] != 0:
         return
-    x[a], y[a], u[a], v[a], k = _push_back_of(x[a], y[a], u[a], v[a], seg, reach)
-    if k:
-        cuda.atomic.add(total, 0, k)
+    for s in range(seg.shape[0]):
+        px, py, pu, pv, k = _push_back_of(x[a], y[a], u[a], v[a], seg, s, reach)
+        if k:
+            x[a] = px
+            y[a] = py
+            u[a] = pu
+            v[a] = pv
+            cuda.atomic.add(total, 0, 1)
 
 
 @cuda.jit
@@ -186,8 +191,11 @@ def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
     a = cuda.grid(1)
     if a >= x.shape[0] or kind[a] != 0:
         return
-    ax[a], ay[a], k = _wall_shear_of(x[a], y[a], u[a], v[a], seg, reach, phi, law, coef,
-                                     ax[a], ay[a])
+    for s in range(seg.shape[0]):
+        fx, fy, k = _wall_shear_of(x[a], y[a], u[a], v[a], seg, s, reach, phi, law, coef)
+        if k:
+            ax[a] -= fx
+            ay[a] -= fy
 
 
 #: the ghost table, per particle (carried by the sort with the state)
