@@ -1,7 +1,8 @@
 """The kernels of the mirror ghosts' device form (sphfoam.models.mirror_cuda) against the
 CPU's loops (sphfoam.models.mirror) on made-up particles near two moving walls that meet in
 a corner: the count and table of ghosts, their state (free slip and no-slip, p_G = p_a and
-hydrostatic), their activity, the push-back and the wall shear of each law. Prints one JSON
+hydrostatic), their activity, the push-back and the wall shear of each law, in double
+precision and (``*_single``) with velocity, density and mass in single. Prints one JSON
 line, ``RESULT {...}``: per check the largest relative difference (0 for integers that
 agree, inf for those that do not). Run by tests/test_cuda_backend.py under
 NUMBA_ENABLE_CUDASIM=1.
@@ -26,7 +27,8 @@ def _same(a, b) -> float:
     return 0.0 if np.array_equal(np.asarray(a), np.asarray(b)) else float("inf")
 
 
-def main() -> dict:
+def main(working=np.float64) -> dict:
+    """The checks with velocity, density and mass in the precision ``working``."""
     from numba import cuda
 
     from sphfoam.models import mirror_cuda as dm
@@ -45,10 +47,10 @@ def main() -> dict:
     n = 160
     x = rng.uniform(-0.03, 0.5, n)
     y = rng.uniform(-0.03, 0.5, n)
-    u = rng.normal(0.0, 0.5, n)
-    v = rng.normal(0.0, 0.5, n)
-    rho = 1000.0 + rng.normal(0.0, 5.0, n)
-    m = 1.0 + rng.uniform(0.0, 0.1, n)
+    u = rng.normal(0.0, 0.5, n).astype(working)
+    v = rng.normal(0.0, 0.5, n).astype(working)
+    rho = (1000.0 + rng.normal(0.0, 5.0, n)).astype(working)
+    m = (1.0 + rng.uniform(0.0, 0.1, n)).astype(working)
     kind = np.where(rng.uniform(size=n) < 0.1, 1, 0).astype(np.int64)
     out = {}
 
@@ -78,7 +80,8 @@ def main() -> dict:
     for no_slip in (False, True):
         for hydro in ((False, 0.0, 0.0, 1.0, 1.0, 1.0),
                       (True, 0.0, -9.81, 1000.0, 2.5e5, 7.0)):
-            cpu = [np.concatenate([a, np.zeros(ng)]) for a in (x, y, u, v, rho, m)]
+            cpu = [np.concatenate([a, np.zeros(ng, dtype=a.dtype)])
+                   for a in (x, y, u, v, rho, m)]
             dev = [a.copy() for a in cpu]
             gh.refresh_ghosts(*cpu, gidx, src, s1, s2, seg, no_slip, active, *hydro)
             gact = np.concatenate([np.zeros(n), active]).astype(np.uint8)
@@ -112,8 +115,8 @@ def main() -> dict:
     phi = np.linspace(1.0, 0.0, 33) ** 2
     out["shear"] = 0.0
     for law, coef in ((0, 1e-6), (1, 1e-3), (2, 20.0)):
-        ax = rng.normal(0.0, 1.0, n)
-        ay = rng.normal(0.0, 1.0, n)
+        ax = rng.normal(0.0, 1.0, n).astype(working)
+        ay = rng.normal(0.0, 1.0, n).astype(working)
         cpu = [ax.copy(), ay.copy()]
         dev = [ax.copy(), ay.copy()]
         out[f"sheared_{law}"] = int(gh.wall_shear(x, y, u, v, kind, seg, reach, phi, law,
@@ -126,6 +129,8 @@ def main() -> dict:
 if __name__ == "__main__":
     try:
         res = main()
+        single = main(np.float32)
+        res.update({f"{k}_single": single[k] for k in ("state", "push_back", "shear")})
     except Exception as e:  # noqa: BLE001  (reported as one line: the test reads it)
         res = {"error": f"{type(e).__name__}: {e}"}
     print("RESULT " + json.dumps(res), flush=True)

@@ -86,7 +86,8 @@ def test_mirror_kernels_match_the_cpu_loops_under_the_simulator():
     """Each kernel of the mirror ghosts' device form against the CPU's loop on made-up
     particles near two moving walls meeting in a corner (tests/cuda_mirror_kernels.py):
     the ghosts' count and table, their state (free slip and no-slip, p_G = p_a and
-    hydrostatic), their activity, the push-back and the wall shear of the three laws."""
+    hydrostatic), their activity, the push-back and the wall shear of the three laws; in
+    double precision and in single."""
     res = _simulated("cuda_mirror_kernels.py")
     assert "error" not in res, res
     # every branch taken: corner ghosts, dormant ones, particles pushed back and sheared
@@ -96,6 +97,9 @@ def test_mirror_kernels_match_the_cpu_loops_under_the_simulator():
         assert res[k] == 0.0, (k, res)
     for k in ("state", "shear"):
         assert res[k] < RTOL, (k, res)
+    # single precision: stored in float32 from the same double arithmetic (a few ulps)
+    for k in ("state_single", "push_back_single", "shear_single"):
+        assert res[k] < 1e-6, (k, res)
 
 
 def test_free_slip_mirror_ghosts_match_cpu_under_the_simulator():
