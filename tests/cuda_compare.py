@@ -1,7 +1,9 @@
 """Run a case on the CPU backend (gather over full lists) and on the CUDA backend and print
-the largest relative difference of x, y, u, v, rho after N steps, one JSON line per case.
+the largest relative difference of x, y, u, v, rho of the particles (ids >= 0: not the
+mirror ghosts) after N steps, one JSON line per case, with per backend the lists built and
+reused, the ghosts and the models' summaries.
 
-    python tests/cuda_compare.py CASE_DIR_OR_NAME [--dx DX] [--steps N] [edits as JSON]
+    python tests/cuda_compare.py CASE_DIR_OR_NAME [--dx DX] [--steps N] [--edits JSON]
 
 Used by tests/test_cuda_backend.py under NUMBA_ENABLE_CUDASIM=1 (the simulator) and by
 benchmarks/gpu_check.sh on a device.

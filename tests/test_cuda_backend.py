@@ -3,7 +3,8 @@
 Each comparison runs in a subprocess with ``NUMBA_ENABLE_CUDASIM=1`` (it must be set before
 numba.cuda is imported; the rest of the suite keeps the real numba.cuda): a tiny case, a few
 steps on each backend (the CPU one gathering over full lists, as the device does), then x,
-y, u, v, rho by particle id. The same neighbour lists in the same order, the same sums in
+y, u, v, rho by particle id (mirror ghosts, ids < 0, left out; their count, the lists built
+and reused and the models' summaries compared as such). The same neighbour lists in the same order, the same sums in
 the same order: what differs is round-off, from the CPU's fastmath contraction and
 reassociation (the simulator evaluates the kernels' Python in plain double arithmetic; on a
 device, fused multiply-adds), so the fields agree to ``RTOL`` relative to each field's
