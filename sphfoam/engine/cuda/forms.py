@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import importlib
 
+
 def covered_hooks(model) -> tuple[str, ...]:
     """The hooks of ``model`` its device form stands for (none without one)."""
     return tuple(getattr(model, "device_hooks", ())) if getattr(model, "device_form", "") \
