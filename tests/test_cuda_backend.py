@@ -153,3 +153,20 @@ def test_backend_is_a_checked_schemes_entry(tutorial):
         == "cuda"
     with pytest.raises(Exception, match="backend"):
         Case(tutorial("damBreak", {"system/sphSchemes:backend": "opencl"})).schemes
+
+
+def test_a_hook_its_device_form_does_not_stand_for_is_refused_by_name(tutorial):
+    """A model whose device form leaves out one of its hooks is refused, naming that hook."""
+    from types import SimpleNamespace
+
+    from sphfoam.case.case import Case
+    from sphfoam.engine.cuda.build import refusals
+
+    bnd = Case(tutorial("solitaryBeach")).models.sph["boundary"]
+    sel = SimpleNamespace(dim=2, models=lambda: [bnd])
+    assert refusals(sel) == []
+    partial = type("PartialMirror", (type(bnd),), {
+        "device_hooks": tuple(h for h in type(bnd).device_hooks if h != "after_step")})
+    sel = SimpleNamespace(dim=2, models=lambda: [partial(bnd.coeffs)])
+    assert refusals(sel) == ["boundary 'mirrorGhosts': its run-time hooks (after_step) run on "
+                             "host arrays (no device form)"]
