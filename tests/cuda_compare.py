@@ -1,9 +1,10 @@
 """Run a case on the CPU backend (gather over full lists) and on the CUDA backend and print
-the largest relative difference of x, y, u, v, rho, m (z, w in 3-D) after N steps, one
-JSON line per case (each field against its largest magnitude, a velocity component
-against the velocity's largest component).
+the largest relative difference of x, y, u, v, rho, m (z, w in 3-D) of the particles (ids
+>= 0: not the mirror ghosts) after N steps, one JSON line per case (each field against its
+largest magnitude, a velocity component against the velocity's largest component), with per
+backend the lists built and reused, the ghosts and the models' summaries.
 
-    python tests/cuda_compare.py CASE_DIR_OR_NAME [--dx DX] [--steps N] [edits as JSON]
+    python tests/cuda_compare.py CASE_DIR_OR_NAME [--dx DX] [--steps N] [--edits JSON]
 
 Used by tests/test_cuda_backend.py under NUMBA_ENABLE_CUDASIM=1 (the simulator) and by
 benchmarks/gpu_check.sh on a device.
@@ -23,9 +24,11 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _fields(sim):
-    """The positions, velocities and density by particle id (z, w too in 3-D), and the ids."""
+    """Positions, velocities, density and mass of the particles (ids >= 0: ghosts are no
+    particles; z, w too in 3-D) by id, and the ids."""
     st = sim.state
     order = np.argsort(st.id, kind="stable")
+    order = order[st.id[order] >= 0]
     return {k: np.asarray(getattr(st, k), dtype=np.float64)[order]
             for k in (*"xyz"[:st.dim], *"uvw"[:st.dim], "rho", "m")}, st.id[order]
 
@@ -70,6 +73,11 @@ def compare(src: Path, edits: dict, steps: int) -> dict:
             res["rel"][k] = float(np.max(np.abs(a[k] - b[k]))) / scale if res["same_ids"] \
                 else float("inf")
         res["dt_rel"] = abs(res["time_cpu"] - res["time_cuda"]) / max(res["time_cpu"], 1e-300)
+        # lists built and reused, ghosts (kind 2) now, the models' summaries: per backend
+        for k, get in (("built", lambda s: s.list_built), ("reused", lambda s: s.list_reused),
+                       ("ghosts", lambda s: int((s.state.kind == 2).sum())),
+                       ("summary", lambda s: s.summary())):
+            res[k] = [get(sims["cpu"]), get(sims["cuda"])]
     return res
 
 

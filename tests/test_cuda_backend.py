@@ -68,15 +68,29 @@ CASES = [("damBreakMatched", 0.1, 5, {}),
          pytest.param("damBreak3D", 0.2, 3, {}, marks=_SLOW)]
 
 
-def _compare(case: str, dx, steps: int, edits: dict) -> dict:
+def _simulated(script: str, *args: str) -> dict:
+    """``RESULT {...}`` of ``tests/<script>`` run under the simulator (a subprocess)."""
     env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
-    cmd = [sys.executable, str(ROOT / "tests" / "cuda_compare.py"), case,
-           "--steps", str(steps), "--edits", json.dumps(edits)] \
-        + (["--dx", repr(dx)] if dx else [])
+    cmd = [sys.executable, str(ROOT / "tests" / script), *args]
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
     line = [x for x in out.stdout.splitlines() if x.startswith("RESULT ")]
     assert line, out.stdout[-2000:] + out.stderr[-4000:]
     return json.loads(line[-1][7:])
+
+
+def _compare(case: str, dx, steps: int, edits: dict | None = None) -> dict:
+    return _simulated("cuda_compare.py", case, "--steps", str(steps),
+                      *(["--dx", repr(dx)] if dx else []),
+                      *(["--edits", json.dumps(edits)] if edits else []))
+
+
+def _assert_matches(res, dim: int = 2):
+    assert "error" not in res, res
+    assert sorted(res["rel"]) == sorted(["rho", "m", *"xyz"[:dim], *"uvw"[:dim]]), res
+    assert res["same_ids"]
+    assert res["dt_rel"] < 1e-12, res
+    for k, rel in res["rel"].items():
+        assert rel < RTOL, (k, res)
 
 
 #: the models whose run-time hooks run on the device in their declared forms
@@ -112,14 +126,66 @@ HOOK_CASES = [
 
 @pytest.mark.parametrize("case, dx, steps, edits", CASES + HOOK_CASES)
 def test_cuda_matches_cpu_under_the_simulator(case, dx, steps, edits):
-    res = _compare(case, dx, steps, edits)
+    _assert_matches(_compare(case, dx, steps, edits), 3 if case.endswith("3D") else 2)
+
+
+#: solitaryBeach (mirrorGhosts, pressure hydrostatic, wallLaw smooth, the moving paddle) at
+#: dx = 0.15 m: 172 particles, 191 ghosts, 9 of them in the corner of the paddle and the bed
+_BEACH = ("solitaryBeach", 0.15)
+
+
+def test_mirror_ghosts_match_cpu_under_the_simulator():
+    """Seven steps of the beach on one list (the ghosts' activity and count checked on the
+    device each step): ghosts made in the skin beyond the support are dormant (mass 0), and
+    a particle crosses the bed and is put back (the summaries say so)."""
+    res = _compare(*_BEACH, 7)
+    _assert_matches(res)
+    assert res["built"] == [1, 1] and res["reused"] == [6, 6], res
+    assert res["ghosts"][0] == res["ghosts"][1] > 0, res
+    assert res["summary"][0] == res["summary"][1] == "1 put back across a mirror wall", res
+
+
+def test_mirror_kernels_match_the_cpu_loops_under_the_simulator():
+    """Each kernel of the mirror ghosts' device form against the CPU's loop on made-up
+    particles near two moving walls meeting in a corner (tests/cuda_mirror_kernels.py):
+    the ghosts' count and table, their state (free slip and no-slip, p_G = p_a and
+    hydrostatic), their activity, the push-back and the wall shear of the three laws; in
+    double precision and in single."""
+    res = _simulated("cuda_mirror_kernels.py")
     assert "error" not in res, res
-    dim = 3 if case.endswith("3D") else 2
-    assert sorted(res["rel"]) == sorted(["rho", "m", *"xyz"[:dim], *"uvw"[:dim]]), res
-    assert res["same_ids"]
-    assert res["dt_rel"] < 1e-12, res
-    for k, rel in res["rel"].items():
-        assert rel < RTOL, (k, res)
+    # every branch taken: corner ghosts, dormant ones, particles pushed back and sheared
+    assert min(res["ghosts"], res["corner_ghosts"], res["dormant"], res["pushed"],
+               res["sheared_0"], res["sheared_1"], res["sheared_2"]) > 0, res
+    for k in ("count", "table", "activity", "push_back"):
+        assert res[k] == 0.0, (k, res)
+    for k in ("state", "shear"):
+        assert res[k] < RTOL, (k, res)
+    # single precision: stored in float32 from the same double arithmetic (a few ulps)
+    for k in ("state_single", "push_back_single", "shear_single"):
+        assert res[k] < 1e-6, (k, res)
+
+
+def test_free_slip_mirror_ghosts_and_xsph_match_cpu_under_the_simulator():
+    """solitaryWallRunup's mirrorGhosts (free slip, p_G = p_a: T(3.77)-(3.80) as printed)
+    and XSPH at dx = 5 m (104 particles, 136 ghosts), with a skin of 0.2 % of the support:
+    the list built at every step (the last build's ghosts retired among the particles, new
+    ones made, sorted and mapped through the sort)."""
+    res = _compare("solitaryWallRunup", 5.0, 3,
+                   {"system/sphSchemes:neighbourSearch.cellSizeFactor": 1.002})
+    _assert_matches(res)
+    assert res["built"] == [3, 3], res
+    assert res["ghosts"][0] == res["ghosts"][1] > 0, res
+
+
+@_SLOW
+def test_mirror_ghosts_outside_the_grid_are_dropped_as_on_the_cpu():
+    """A box that cuts the ghosts below the bed: they are dropped at each build, not
+    reported as particles that left; the count check then rebuilds the list every step."""
+    res = _compare(*_BEACH, 3, {"system/particleDict:domain": {"min": [-1.0, -0.1],
+                                                               "max": [18.5, 2.0]}})
+    _assert_matches(res)
+    assert res["built"] == [3, 3], res
+    assert res["ghosts"][0] == res["ghosts"][1] > 0, res
 
 
 #: mixingLength's wall distance on the device: a state whose lineDist is zero gets it at
@@ -183,9 +249,9 @@ def test_a_model_with_no_device_form_is_refused_by_name(tutorial, monkeypatch):
     from sphfoam.engine.cuda.build import Unsupported, check_supported
     from sphfoam.models.adami import Adami
 
-    case = Case(tutorial("solitaryCollision"))
-    with pytest.raises(Unsupported, match="boundary 'mirrorGhosts'"):
-        check_supported(selection(case))
+    # every tutorial's selection has device forms of its hooks (P's collision: mirror
+    # ghosts, XSPH, MLS)
+    check_supported(selection(Case(tutorial("solitaryCollision"))))
     # a model's hooks without their declared forms: refused, naming the hooks
     sel = selection(Case(tutorial("damBreak", {
         "constant/sphProperties:boundary": {"type": "adami"}})))
@@ -293,3 +359,20 @@ def test_declared_forms_stand_for_hooks_the_model_implements():
                     declared.add(name)
                     assert uncovered(m, _HOOKS) == [], (family, name, extra)
     assert {"xsph", "deltaPlusShifting", "lindShifting", "mixingLength", "adami"} <= declared
+
+
+def test_a_hook_its_device_form_does_not_stand_for_is_refused_by_name(tutorial):
+    """A model whose device form leaves out one of its hooks is refused, naming that hook."""
+    from types import SimpleNamespace
+
+    from sphfoam.case.case import Case
+    from sphfoam.engine.cuda.build import refusals
+
+    bnd = Case(tutorial("solitaryBeach")).models.sph["boundary"]
+    sel = SimpleNamespace(dim=2, models=lambda: [bnd])
+    assert refusals(sel) == []
+    partial = type("PartialMirror", (type(bnd),), {
+        "device_hooks": tuple(h for h in type(bnd).device_hooks if h != "after_step")})
+    sel = SimpleNamespace(dim=2, models=lambda: [partial(bnd.coeffs)])
+    assert refusals(sel) == ["boundary 'mirrorGhosts': its run-time hooks (after_step) run on "
+                             "host arrays (no device form)"]

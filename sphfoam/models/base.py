@@ -55,12 +55,17 @@ the walls; never the simulation itself:
                                    result (XSPH's v + dv, then a shifting's + delta_u)
 ``summary()``                      a line for the end of the run's log ("" for none)
 
-A model may also declare its hooks as data, :meth:`~PipelineModel.device_forms`
-(:mod:`sphfoam.engine.hookforms`), for a backend whose arrays live on a device; a hook with
-no declared form keeps the model off such a backend.
+On a backend whose arrays live on a device (CUDA) the hooks run only in a form that
+backend can run: declared as data, :meth:`~PipelineModel.device_forms`
+(:mod:`sphfoam.engine.hookforms`), or a *device form* class the model names
+(``device_form``, "module:Class", standing for the hooks in ``device_hooks``;
+:mod:`sphfoam.engine.cuda.forms`); a model with a hook neither covers is refused there by
+name.
 """
 
 from __future__ import annotations
+
+from typing import ClassVar
 
 from sphfoam.context import CaseContext
 from sphfoam.engine.terms import Term
@@ -81,6 +86,10 @@ class PipelineModel(Model):
     prefix: str = ""
     #: per-particle fields the set-up writes and the code reads as ``fld[F_<name>, i]``
     particle_fields: tuple[str, ...] = ()
+    #: the device form of the run-time hooks, "module:Class" (:mod:`sphfoam.engine.cuda.
+    #: forms`), and the hooks it stands for
+    device_form: ClassVar[str] = ""
+    device_hooks: ClassVar[tuple[str, ...]] = ()
 
     def terms(self) -> list[Term]:
         return []

@@ -234,6 +234,10 @@ class MirrorGhosts(Boundary):
            "wall's shear stress T(3.84)-(3.85) on a free-slip wall")
     wall_placement = "none"
     massless_ghosts = True
+    device_form = "sphfoam.models.mirror_cuda:MirrorGhostsDevice"
+    device_hooks = ("attach", "before_neighbours", "add_particles", "keeps_neighbours",
+                    "after_sort", "before_evaluation", "after_rates", "walls_moved",
+                    "after_step", "summary")
 
     class Coeffs(wl.LawCoeffs):
         noSlip: bool = Field(False, description="reflect the tangential velocity too "

@@ -36,18 +36,47 @@ def _near(xa, ya, seg, s, reach, margin=0.0):
     return d > 0.0 and d < reach and t >= -margin and t <= seg[s, 6] + margin
 
 
+@njit(**_JIT, inline="always")
+def ghosts_of(xa, ya, seg, corners, reach, margin):
+    """How many ghosts particle (xa, ya) makes, T(3.77): one per segment it is near, one more
+    per corner whose two segments it is near both."""
+    k = 0
+    for s in range(seg.shape[0]):
+        if _near(xa, ya, seg, s, reach, margin):
+            k += 1
+    for c in range(corners.shape[0]):
+        if _near(xa, ya, seg, corners[c, 0], reach, margin) and \
+                _near(xa, ya, seg, corners[c, 1], reach, margin):
+            k += 1
+    return k
+
+
+@njit(**_JIT, inline="always")
+def fill_of(a, xa, ya, seg, corners, reach, margin, j, src, s1, s2):
+    """The ghosts of particle ``a`` at (xa, ya) from slot ``j`` on (:func:`ghosts_of` of
+    them): ghost j mirrors ``src[j]`` across segment ``s1[j]`` (and ``s2[j]`` >= 0)."""
+    for s in range(seg.shape[0]):
+        if _near(xa, ya, seg, s, reach, margin):
+            src[j] = a
+            s1[j] = s
+            s2[j] = -1
+            j += 1
+    for c in range(corners.shape[0]):
+        if _near(xa, ya, seg, corners[c, 0], reach, margin) and \
+                _near(xa, ya, seg, corners[c, 1], reach, margin):
+            src[j] = a
+            s1[j] = corners[c, 0]
+            s2[j] = corners[c, 1]
+            j += 1
+    return j
+
+
 @njit(parallel=True, **_JIT)
 def count_ghosts(x, y, kind, seg, corners, reach, count, margin=0.0):
     for a in prange(x.shape[0]):
         k = 0
         if kind[a] == 0:
-            for s in range(seg.shape[0]):
-                if _near(x[a], y[a], seg, s, reach, margin):
-                    k += 1
-            for c in range(corners.shape[0]):
-                if _near(x[a], y[a], seg, corners[c, 0], reach, margin) and \
-                        _near(x[a], y[a], seg, corners[c, 1], reach, margin):
-                    k += 1
+            k = ghosts_of(x[a], y[a], seg, corners, reach, margin)
         count[a] = k
 
 
@@ -57,20 +86,23 @@ def fill_ghosts(x, y, kind, seg, corners, reach, offset, src, s1, s2, margin=0.0
     for a in prange(x.shape[0]):
         if kind[a] != 0:
             continue
-        j = offset[a]
-        for s in range(seg.shape[0]):
-            if _near(x[a], y[a], seg, s, reach, margin):
-                src[j] = a
-                s1[j] = s
-                s2[j] = -1
-                j += 1
-        for c in range(corners.shape[0]):
-            if _near(x[a], y[a], seg, corners[c, 0], reach, margin) and \
-                    _near(x[a], y[a], seg, corners[c, 1], reach, margin):
-                src[j] = a
-                s1[j] = corners[c, 0]
-                s2[j] = corners[c, 1]
-                j += 1
+        fill_of(a, x[a], y[a], seg, corners, reach, margin, offset[a], src, s1, s2)
+
+
+@njit(**_JIT, inline="always")
+def push_back_of(xa, ya, ua, va, seg, s, reach):
+    """(x, y, u, v, 1) of a fluid particle at (xa, ya) that crossed segment ``s`` within
+    ``reach`` behind it, reflected back with its normal velocity relative to the wall
+    reversed where it points out of the fluid; (xa, ya, ua, va, 0) otherwise."""
+    t, d = _local(xa, ya, seg, s)
+    if d <= 0.0 and d > -reach and t >= 0.0 and t <= seg[s, 6]:
+        px = xa - 2.0 * d * seg[s, 4]
+        py = ya - 2.0 * d * seg[s, 5]
+        un = (ua - seg[s, 7]) * seg[s, 4] + (va - seg[s, 8]) * seg[s, 5]
+        if un < 0.0:
+            return px, py, ua - 2.0 * un * seg[s, 4], va - 2.0 * un * seg[s, 5], 1
+        return px, py, float(ua), float(va), 1
+    return xa, ya, float(ua), float(va), 0
 
 
 @njit(parallel=True, **_JIT)
@@ -84,14 +116,12 @@ def push_back(x, y, u, v, kind, seg, reach):
         if kind[a] != 0:
             continue
         for s in range(seg.shape[0]):
-            t, d = _local(x[a], y[a], seg, s)
-            if d <= 0.0 and d > -reach and t >= 0.0 and t <= seg[s, 6]:
-                x[a] -= 2.0 * d * seg[s, 4]
-                y[a] -= 2.0 * d * seg[s, 5]
-                un = (u[a] - seg[s, 7]) * seg[s, 4] + (v[a] - seg[s, 8]) * seg[s, 5]
-                if un < 0.0:
-                    u[a] -= 2.0 * un * seg[s, 4]
-                    v[a] -= 2.0 * un * seg[s, 5]
+            px, py, pu, pv, k = push_back_of(x[a], y[a], u[a], v[a], seg, s, reach)
+            if k:
+                x[a] = px
+                y[a] = py
+                u[a] = pu
+                v[a] = pv
                 count += 1
     return count
 
@@ -112,6 +142,29 @@ def _reflect_velocity(u, v, seg, s, no_slip):
     return u - 2.0 * un * seg[s, 4], v - 2.0 * un * seg[s, 5]
 
 
+@njit(**_JIT, inline="always")
+def ghost_state(xa, ya, ua, va, rhoa, seg, s1, s2, no_slip, hydro, gx, gy, rho0, B, gamma):
+    """(x_G, y_G, u_G, v_G, rho_G) of the ghost of particle a across segment ``s1`` (and
+    ``s2`` >= 0, the corner ghost): T(3.77)-(3.80), or with ``hydro`` the hydrostatic
+    pressure (see :func:`refresh_ghosts`)."""
+    px, py = _reflect_point(xa, ya, seg, s1)
+    gu, gv = _reflect_velocity(ua, va, seg, s1, no_slip)
+    if s2 >= 0:
+        px, py = _reflect_point(px, py, seg, s2)
+        if no_slip:
+            # relative to the mean velocity of the two walls: zero relative velocity there
+            gu = seg[s1, 7] + seg[s2, 7] - ua
+            gv = seg[s1, 8] + seg[s2, 8] - va
+        else:
+            gu, gv = _reflect_velocity(gu, gv, seg, s2, False)
+    rhog = rhoa
+    if hydro:
+        pa = B * ((rhoa / rho0) ** gamma - 1.0)
+        pg = pa + rhoa * (gx * (px - xa) + gy * (py - ya))
+        rhog = rho0 * max(1.0 + pg / B, 1e-6) ** (1.0 / gamma)
+    return px, py, gu, gv, rhog
+
+
 @njit(parallel=True, **_JIT)
 def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip, active,
                    hydro=False, gx=0.0, gy=0.0, rho0=1000.0, B=1.0, gamma=7.0):
@@ -125,26 +178,18 @@ def refresh_ghosts(x, y, u, v, rho, m, gidx, src, s1, s2, seg, no_slip, active,
     for j in prange(gidx.shape[0]):
         g = gidx[j]
         a = src[j]
-        px, py = _reflect_point(x[a], y[a], seg, s1[j])
-        gu, gv = _reflect_velocity(u[a], v[a], seg, s1[j], no_slip)
-        if s2[j] >= 0:
-            px, py = _reflect_point(px, py, seg, s2[j])
-            if no_slip:
-                # relative to the mean velocity of the two walls: zero relative velocity there
-                gu = seg[s1[j], 7] + seg[s2[j], 7] - u[a]
-                gv = seg[s1[j], 8] + seg[s2[j], 8] - v[a]
-            else:
-                gu, gv = _reflect_velocity(gu, gv, seg, s2[j], False)
-        x[g] = px
-        y[g] = py
-        u[g] = gu
-        v[g] = gv
-        rho[g] = rho[a]
-        if hydro:
-            pa = B * ((rho[a] / rho0) ** gamma - 1.0)
-            pg = pa + rho[a] * (gx * (px - x[a]) + gy * (py - y[a]))
-            rho[g] = rho0 * max(1.0 + pg / B, 1e-6) ** (1.0 / gamma)
+        x[g], y[g], u[g], v[g], rho[g] = ghost_state(x[a], y[a], u[a], v[a], rho[a], seg,
+                                                     s1[j], s2[j], no_slip, hydro, gx, gy,
+                                                     rho0, B, gamma)
         m[g] = m[a] if active[j] else 0.0
+
+
+@njit(**_JIT, inline="always")
+def ghost_on(xa, ya, seg, s1, s2, reach):
+    """Whether particle (xa, ya) still makes its ghost across ``s1`` (and ``s2`` >= 0): within
+    ``reach`` of the segment(s), projecting onto them (the criterion of T(3.77))."""
+    return _near(xa, ya, seg, s1, reach, 0.0) and \
+        (s2 < 0 or _near(xa, ya, seg, s2, reach, 0.0))
 
 
 @njit(parallel=True, **_JIT)
@@ -154,12 +199,25 @@ def ghost_activity(x, y, src, s1, s2, seg, reach, active):
     n_on = 0
     for j in prange(src.shape[0]):
         a = src[j]
-        on = _near(x[a], y[a], seg, s1[j], reach) and \
-            (s2[j] < 0 or _near(x[a], y[a], seg, s2[j], reach))
+        on = ghost_on(x[a], y[a], seg, s1[j], s2[j], reach)
         active[j] = on
         if on:
             n_on += 1
     return n_on
+
+
+@njit(**_JIT, inline="always")
+def fluid_within(g, x, y, kind, nb_start, nb_idx, support2):
+    """How many fluid neighbours of particle ``g`` are closer than sqrt(support2)."""
+    bad = 0
+    for k in range(nb_start[g], nb_start[g + 1]):
+        b = nb_idx[k]
+        if kind[b] == 0:
+            dx = x[g] - x[b]
+            dy = y[g] - y[b]
+            if dx * dx + dy * dy < support2:
+                bad += 1
+    return bad
 
 
 @njit(parallel=True, **_JIT)
@@ -169,16 +227,9 @@ def dormant_ghost_near_fluid(x, y, kind, gidx, active, nb_start, nb_idx, support
     mass, e.g. T(3.89))."""
     bad = 0
     for j in prange(gidx.shape[0]):
-        g = gidx[j]
         if active[j]:
             continue
-        for k in range(nb_start[g], nb_start[g + 1]):
-            b = nb_idx[k]
-            if kind[b] == 0:
-                dx = x[g] - x[b]
-                dy = y[g] - y[b]
-                if dx * dx + dy * dy < support2:
-                    bad += 1
+        bad += fluid_within(gidx[j], x, y, kind, nb_start, nb_idx, support2)
     return bad > 0
 
 
@@ -255,6 +306,36 @@ WALL_SHEAR_LAWS = {"smooth": 0, "rough": 1, "prescribedUPlus": 2}
 assert set(WALL_SHEAR_LAWS) == set(LAWS)
 
 
+@njit(**_JIT)
+def wall_shear_of(xa, ya, ua, va, seg, s, reach, phi, law, coef):
+    """(fx, fy, 1): the wall shear of segment ``s`` on a fluid particle near it,
+    dv_a/dt = -(fx, fy) = -2 Phi(d_a) u*_a^2 t_a (see :func:`wall_shear`); (0, 0, 0) where
+    the particle is not near it or does not move along it."""
+    t, d = _local(xa, ya, seg, s)
+    if not (d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]):
+        return 0.0, 0.0, 0
+    ur = ua - seg[s, 7]
+    vr = va - seg[s, 8]
+    un = ur * seg[s, 4] + vr * seg[s, 5]
+    tx = ur - un * seg[s, 4]
+    ty = vr - un * seg[s, 5]
+    ut = math.sqrt(tx * tx + ty * ty)
+    if ut <= 0.0:
+        return 0.0, 0.0, 0
+    if law == 0:
+        us = smooth_ustar(ut, d, coef)
+    elif law == 1:
+        us = rough_ustar(ut, max(d, coef), coef)
+    else:
+        us = uplus_ustar(ut, coef)
+    nphi = phi.shape[0] - 1
+    k = d * (nphi / reach)
+    i = min(int(k), nphi - 1)
+    w = phi[i] + (k - i) * (phi[i + 1] - phi[i])
+    f = 2.0 * w * us * us / ut
+    return f * tx, f * ty, 1
+
+
 @njit(parallel=True, **_JIT)
 def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
     """Add the wall shear stress of the law of the wall to the acceleration of every fluid
@@ -267,37 +348,16 @@ def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
     (``law`` 0: smooth T(3.84), ``coef`` nu; 1: rough T(3.85), ``coef`` ks, y at least ks;
     2: prescribed U+, ``coef`` U+), Phi(d) the kernel integrated along the wall line,
     tabulated in ``phi`` at d = k reach/(len(phi) - 1). Returns how many particles felt it."""
-    nphi = phi.shape[0] - 1
-    scale = nphi / reach
     count = 0
     for a in prange(x.shape[0]):
         if kind[a] != 0:
             continue
         for s in range(seg.shape[0]):
-            t, d = _local(x[a], y[a], seg, s)
-            if not (d > 0.0 and d < reach and t >= 0.0 and t <= seg[s, 6]):
-                continue
-            ur = u[a] - seg[s, 7]
-            vr = v[a] - seg[s, 8]
-            un = ur * seg[s, 4] + vr * seg[s, 5]
-            tx = ur - un * seg[s, 4]
-            ty = vr - un * seg[s, 5]
-            ut = math.sqrt(tx * tx + ty * ty)
-            if ut <= 0.0:
-                continue
-            if law == 0:
-                us = smooth_ustar(ut, d, coef)
-            elif law == 1:
-                us = rough_ustar(ut, max(d, coef), coef)
-            else:
-                us = uplus_ustar(ut, coef)
-            k = d * scale
-            i = min(int(k), nphi - 1)
-            w = phi[i] + (k - i) * (phi[i + 1] - phi[i])
-            f = 2.0 * w * us * us / ut
-            ax[a] -= f * tx
-            ay[a] -= f * ty
-            count += 1
+            fx, fy, k = wall_shear_of(x[a], y[a], u[a], v[a], seg, s, reach, phi, law, coef)
+            if k:
+                ax[a] -= fx
+                ay[a] -= fy
+                count += 1
     return count
 
 

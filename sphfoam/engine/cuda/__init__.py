@@ -6,6 +6,9 @@ device thread per particle, every array on the device between writes.
 * :mod:`~sphfoam.engine.cuda.build`: the refusals by name, the module cached on disk;
 * :mod:`~sphfoam.engine.cuda.runtime`: :class:`CudaSimulation`, the ``Simulation``'s
   interface to the time loop over device arrays.
+* :mod:`~sphfoam.engine.cuda.forms`, :mod:`~sphfoam.engine.cuda.context`: the device forms
+  of the models' run-time hooks (a model names its own, ``device_form``) and what they see
+  of the simulation.
 
 Nothing here imports the CPU emitter or pipeline.
 """

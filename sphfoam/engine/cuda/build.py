@@ -8,6 +8,7 @@ import dataclasses
 
 import numpy as np
 
+from sphfoam.engine.cuda.forms import covered_hooks
 from sphfoam.engine.generated import load_generated
 from sphfoam.engine.hookforms import uncovered
 from sphfoam.engine.plan import Selection, core_parameters, missing_dimension
@@ -18,7 +19,8 @@ CORE = ("h", "inv_h", "support2", "eta2", "gx", "gy")
 
 #: the run-time hooks (``sphfoam.models.base.HOOK_NAMES``): Python between stages on host
 #: arrays, which the device runtime runs only in their declared forms
-#: (``sphfoam.engine.hookforms``, :mod:`sphfoam.engine.cuda.hooks`)
+#: (``sphfoam.engine.hookforms``, :mod:`sphfoam.engine.cuda.hooks`) or through the model's
+#: device form (:mod:`sphfoam.engine.cuda.forms`)
 _HOOKS = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
           "before_evaluation", "after_rates", "after_density_rate", "walls_moved",
           "after_step", "advection_velocity", "summary")
@@ -36,7 +38,8 @@ def refusals(sel: Selection, motions=None) -> list[str]:
         if why is not None:
             out.append(why)
             continue
-        hooks = uncovered(m, _HOOKS)
+        covered = covered_hooks(m)
+        hooks = [h for h in uncovered(m, _HOOKS) if h not in covered]
         if hooks:
             out.append(f"{m.family} {m.name!r}: its run-time hooks ({', '.join(hooks)}) run "
                        "on host arrays (no device form)")

@@ -189,6 +189,25 @@ def permute(src, order, dst):
 
 
 @cuda.jit
+def extend(src, dst):
+    """dst[i] = src[i] where src has an element, 0 after (an array grown at its end)."""
+    i = cuda.grid(1)
+    if i >= dst.shape[0]:
+        return
+    dst[i] = src[i] if i < src.shape[0] else 0
+
+
+@cuda.jit
+def extend_rows(src, dst):
+    """Rows of a 2-D array grown at their end: dst[:, i] = src[:, i], 0 after."""
+    i = cuda.grid(1)
+    if i >= dst.shape[1]:
+        return
+    for r in range(dst.shape[0]):
+        dst[r, i] = src[r, i] if i < src.shape[1] else 0
+
+
+@cuda.jit
 def permute_rows(src, order, dst):
     """Rows of a 2-D array: dst[:, i] = src[:, order[i]]."""
     i = cuda.grid(1)

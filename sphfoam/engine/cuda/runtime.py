@@ -17,8 +17,10 @@ import numpy as np
 
 from sphfoam.engine.cuda import cuda_module
 from sphfoam.engine.bodies import components as components_of
+from sphfoam.engine.cuda.context import DeviceContext
+from sphfoam.engine.cuda.forms import device_forms
 from sphfoam.engine.neighbours import CellList
-from sphfoam.engine.state import FLUID, ParticleState
+from sphfoam.engine.state import FLUID, GHOST, ParticleState
 from sphfoam.engine.stepping import StepContext, advance, components, field_components
 
 #: the health monitor's last good state is kept on the device every this many passing steps
@@ -202,6 +204,13 @@ class CudaSimulation:
         from sphfoam.engine.cuda.hooks import DeviceHooks
 
         self.hooks = DeviceHooks(self)
+        #: the device forms of the selected models' run-time hooks
+        #: (:mod:`sphfoam.engine.cuda.forms`), called at the same points as on the CPU
+        self.forms = device_forms(sel)
+        #: what the device forms see of this simulation
+        self.context = DeviceContext(self)
+        for form in self.forms:
+            form.attach(self.context)
 
     # --- host <-> device ------------------------------------------------------------------
     def _to(self, a, dtype):
@@ -282,7 +291,43 @@ class CudaSimulation:
         return self._get(self.d["p"])
 
     def summary(self) -> str:
-        return ""
+        """What the selected models' device forms report at the end of a run."""
+        return "; ".join(x for x in (f.summary() for f in self.forms
+                                     if hasattr(f, "summary")) if x)
+
+    # --- the models' device forms ---------------------------------------------------------
+    def _before_evaluation(self):
+        """Before every equation of state, rates or density pass: the declared forms
+        (:mod:`sphfoam.engine.cuda.hooks`), then the device forms."""
+        self.hooks.before_evaluation()
+        self._forms("before_evaluation")
+
+    def _forms(self, name: str, *args):
+        """Call ``name`` of every device form that has it."""
+        for form in self.forms:
+            fn = getattr(form, name, None)
+            if fn is not None:
+                fn(self.context, *args)
+
+    def append(self, k: int) -> int:
+        """``k`` particles more at the end of every device array (zeros: the caller fills
+        them, e.g. mirror ghosts); returns the index of the first."""
+        cu, D, n0 = self.cuda, self.D, self.n
+        n1 = n0 + int(k)
+
+        def grown(a):
+            out = cu.device_array((a.shape[0], n1) if a.ndim == 2 else n1, dtype=a.dtype)
+            self._launch(D.extend_rows if a.ndim == 2 else D.extend, n1, a, out)
+            return out
+
+        for key in list(self.d):
+            self.d[key] = grown(self.d[key])
+        for key in list(self.d_extra):
+            dict.__setitem__(self.d_extra, key, grown(self.d_extra[key]))
+        self.d_fld = grown(self.d_fld)
+        self.n = n1
+        self._dirty = True
+        return n0
 
     def invalidate_neighbours(self):
         self._ref = None
@@ -338,7 +383,11 @@ class CudaSimulation:
         d2, v2, out = self._get(self._red)
         if out:
             return False
-        return math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt < 0.5 * self.skin
+        if not math.sqrt(d2) + 1.5 * math.sqrt(v2) * self.last_dt < 0.5 * self.skin:
+            return False
+        # a device form that adds particles says whether they still serve
+        return all(f.keeps_neighbours(self.context) for f in self.forms
+                   if hasattr(f, "add_particles"))
 
     def neighbour_update(self):
         """The neighbour update of this step, timed (``_timed``)."""
@@ -360,6 +409,10 @@ class CudaSimulation:
         self._launch(D.bin_particles, n, d["x"], d["y"], z, cl.x0, cl.y0, cl.z0,
                      1.0 / cl.cell_size, cl.ncx, cl.ncy, cl.ncz, cl.lx, cl.ly, cl.lz, three,
                      cell, counts)
+        for form in self.forms:
+            if hasattr(form, "add_particles"):
+                cell = form.add_particles(self.context, cell, counts)
+        n = self.n
         start = cu.device_array(ncells + 2, dtype=np.int64)
         self._scan_scratch = D.exclusive_scan(counts, start, self._scan_scratch)
         fill = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
@@ -383,6 +436,7 @@ class CudaSimulation:
             self.d_fld = out
         if kept < n:
             self._remove(kept)
+        self._forms("after_sort", order)
         self.cell_start = start[:ncells + 1]
         n = self.n
         count = cu.device_array(n, dtype=np.int64)
@@ -406,16 +460,19 @@ class CudaSimulation:
         self._dirty = True
 
     def _remove(self, kept: int):
-        """Particles binned outside the box (sorted last) leave the simulation."""
+        """Particles binned outside the box (sorted last) leave the simulation; ghosts
+        there (a device form's) are dropped without a report."""
         from sphfoam.engine.simulation import Removal
 
         d = self.d
-        ids = self._get(d["id"][kept:])
-        where = np.column_stack([self._get(d[k][kept:]) for k in self._f8])
-        rem = Removal(self.time, int(ids.shape[0]), ids, where)
-        self.removals.append(rem)
-        if self.on_removal:
-            self.on_removal(rem)
+        real = self._get(d["kind"][kept:]) != GHOST
+        if real.any():
+            ids = self._get(d["id"][kept:])[real]
+            where = np.column_stack([self._get(d[k][kept:])[real] for k in self._f8])
+            rem = Removal(self.time, int(ids.shape[0]), ids, where)
+            self.removals.append(rem)
+            if self.on_removal:
+                self.on_removal(rem)
         for k in list(d):
             d[k] = d[k][:kept]
         for k in list(self.d_extra):
@@ -455,13 +512,13 @@ class CudaSimulation:
             self._timed("prepass", self._launch, getattr(m, f"prepass_{i}"), self.n, *args)
 
     def eos(self):
-        self.hooks.before_evaluation()
+        self._before_evaluation()
         d = self.d
         self._timed("eos", self._launch, self.module.equation_of_state, self.n, d["rho"],
                     d["p"], d["c"], self.d_prm)
 
     def rates(self):
-        self.hooks.before_evaluation()
+        self._before_evaluation()
         args = self._args()
         self._prepass(args)
         sigma = True
@@ -473,14 +530,16 @@ class CudaSimulation:
         self._timed("rates", self._launch, self.module.rates, self.n, *args,
                     *(d[f"a{ax}"] for ax in self._f8), d["drho"], d["sigma"], sigma)
         self.hooks.run("after_rates")
+        self._forms("after_rates")
 
     def density_rate(self):
-        self.hooks.before_evaluation()
+        self._before_evaluation()
         args = self._args()
         self._prepass(args, "density")
         self._timed("density", self._launch, self.module.density_rate, self.n, *args,
                     self.d["drho"])
         self.hooks.run("after_density_rate")
+        self._forms("after_density_rate")
 
     def step_pass(self):
         if getattr(self.module, "HAS_STEP", False):
@@ -521,23 +580,25 @@ class CudaSimulation:
 
     def move_walls(self, t: float):
         """Every wall with a prescribed motion where it is at time ``t`` (a kernel over the
-        particles of each wall entry: r = r0 + d(t), v = d'(t))."""
+        particles of each wall entry: r = r0 + d(t), v = d'(t)); then the hooks' forms that
+        follow walls (``walls_moved``) and ``before_evaluation``, as on the CPU."""
         if not self.motions:
             return
-        self.hooks.walls_moved({w: m.displacement(t) for w, m in self.motions.items()},
-                               {w: m.velocity(t) for w, m in self.motions.items()})
-        self.hooks.before_evaluation()
-        if "patch" not in self.d_extra and "patch" not in self.module.FIELDS:
-            return
-        d = self.d
-        z, w, three = self._third("z", "w")
-        r0 = [self._extra(f"{ax}0") for ax in self._f8]
-        for which, mot in self.motions.items():
-            off = (tuple(mot.displacement(t)) + (0.0,))[:3]
-            vel = (tuple(mot.velocity(t)) + (0.0,))[:3]
-            self._timed("walls", self._launch, self.D.prescribe_patch, self.n, d["x"], d["y"],
-                        z, d["u"], d["v"], w, self._extra("patch"), r0[0], r0[1], r0[-1],
-                        float(which), *map(float, off), *map(float, vel), three)
+        offs = {w: m.displacement(t) for w, m in self.motions.items()}
+        vels = {w: m.velocity(t) for w, m in self.motions.items()}
+        if "patch" in self.d_extra or "patch" in self.module.FIELDS:
+            d = self.d
+            z, w, three = self._third("z", "w")
+            r0 = [self._extra(f"{ax}0") for ax in self._f8]
+            for which in self.motions:
+                off = (tuple(offs[which]) + (0.0,))[:3]
+                vel = (tuple(vels[which]) + (0.0,))[:3]
+                self._timed("walls", self._launch, self.D.prescribe_patch, self.n, d["x"],
+                            d["y"], z, d["u"], d["v"], w, self._extra("patch"), r0[0], r0[1],
+                            r0[-1], float(which), *map(float, off), *map(float, vel), three)
+        self.hooks.walls_moved(offs, vels)
+        self._forms("walls_moved", offs, vels)
+        self._before_evaluation()
 
     # --- the integrator's updates ---------------------------------------------------------
     def run_update(self, name: str, scalars: dict):
@@ -619,5 +680,6 @@ class CudaSimulation:
         """Re-sort, filter the density when due, then one step of the integrator."""
         dt = advance(self, dt_remaining)
         self.hooks.run("after_step", self.last_dt)
+        self._forms("after_step")
         self._dirty = True
         return dt
