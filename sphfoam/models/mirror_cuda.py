@@ -202,6 +202,10 @@ def wall_shear(x, y, u, v, kind, seg, reach, phi, law, coef, ax, ay):
 TABLE = ("gsrc", "gs1", "gs2", "gact")
 
 
+#: the activity counters' reset
+_ZERO3 = np.zeros(3, dtype=np.int64)
+
+
 class MirrorGhostsDevice:
     """``mirrorGhosts`` on the device (see the module docstring)."""
 
@@ -263,8 +267,9 @@ class MirrorGhostsDevice:
         self.before_evaluation(run)
         grown = cu.device_array(n0 + ng, dtype=np.int64)
         run.launch(D.extend, n0 + ng, cell, grown)
-        run.launch(D.bin_particles, ng, d["x"][n0:], d["y"][n0:], cl.x0, cl.y0,
-                   1.0 / cl.cell_size, cl.ncx, cl.ncy, cl.lx, cl.ly, grown[n0:], counts)
+        x, y = d["x"][n0:], d["y"][n0:]          # (a 2-D model: x stands for z, unread)
+        run.launch(D.bin_particles, ng, x, y, x, cl.x0, cl.y0, cl.z0, 1.0 / cl.cell_size,
+                   cl.ncx, cl.ncy, cl.ncz, cl.lx, cl.ly, cl.lz, False, grown[n0:], counts)
         return grown
 
     def after_sort(self, run, order):
@@ -279,7 +284,7 @@ class MirrorGhostsDevice:
     def _activity(self, run):
         d = run.arrays
         gsrc, gs1, gs2, gact = self._table(run)
-        self.d_counts.copy_to_device(np.zeros(3, dtype=np.int64))
+        run.copy_in(self.d_counts, _ZERO3)
         run.launch(ghost_activity, run.n, d["x"], d["y"], gsrc, gs1, gs2, self.d_seg,
                    self.reach, gact, self.d_counts)
 

@@ -42,9 +42,9 @@ class DeviceContext(RunContext):
         return self._sim._get(a)
 
     def copy_in(self, dst, host) -> None:
-        """The host array ``host`` copied into the device array ``dst``, counted."""
-        dst.copy_to_device(host)
-        self._sim.bytes_h2d += host.nbytes
+        """The host array ``host`` copied into the device array ``dst``, counted (and timed
+        with the runtime's copies)."""
+        self._sim._put(dst, host)
 
     def append(self, k: int) -> int:
         """``k`` particles more at the end of every array (zeros); the first's index."""

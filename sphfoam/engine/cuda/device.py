@@ -390,3 +390,20 @@ def sum_partials(partial, out):
     if t == 0:
         out[5] = s0[0]
         out[6] = s1[0]
+
+
+@cuda.jit
+def fill(a, value):
+    """a[:] = value (a 1-D array: no host array copied in to clear it)."""
+    i = cuda.grid(1)
+    if i < a.shape[0]:
+        a[i] = value
+
+
+@cuda.jit
+def fill_rows(a, value):
+    """a[:, :] = value (a 2-D array, one thread per column)."""
+    i = cuda.grid(1)
+    if i < a.shape[1]:
+        for r in range(a.shape[0]):
+            a[r, i] = value

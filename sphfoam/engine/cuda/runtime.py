@@ -236,8 +236,16 @@ class CudaSimulation:
                 self.d_extra[k] = self._to(a, np.float64)
         self.d_fld = self._to(np.stack([st.extra[k] for k in fields]) if fields
                               else np.zeros((0, self.n)), np.float64)
-        self.d_aux = self.cuda.to_device(np.zeros((len(self.module.AUX), self.n),
-                                                  dtype=self.dtype))
+        self.d_aux = self.zeros((len(self.module.AUX), self.n), self.dtype)
+
+    def zeros(self, shape, dtype):
+        """A device array of zeros, cleared on the device (nothing copied in)."""
+        out = self.cuda.device_array(shape, dtype=dtype)
+        if out.ndim == 2:
+            self._launch(self.D.fill_rows, out.shape[1], out, 0)
+        else:
+            self._launch(self.D.fill, out.shape[0], out, 0)
+        return out
 
     def _get(self, a):
         """``a`` copied back (counted; timed as ``copies`` when the timers are on)."""
@@ -404,7 +412,7 @@ class CudaSimulation:
         n = self.n
         ncells = cl.ncells
         cell = cu.device_array(n, dtype=np.int64)
-        counts = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
+        counts = self.zeros(ncells + 1, np.int64)
         z, three = self._third("z")
         self._launch(D.bin_particles, n, d["x"], d["y"], z, cl.x0, cl.y0, cl.z0,
                      1.0 / cl.cell_size, cl.ncx, cl.ncy, cl.ncz, cl.lx, cl.ly, cl.lz, three,
@@ -415,7 +423,7 @@ class CudaSimulation:
         n = self.n
         start = cu.device_array(ncells + 2, dtype=np.int64)
         self._scan_scratch = D.exclusive_scan(counts, start, self._scan_scratch)
-        fill = cu.to_device(np.zeros(ncells + 1, dtype=np.int64))
+        fill = self.zeros(ncells + 1, np.int64)
         order = cu.device_array(n, dtype=np.int64)
         self._launch(D.scatter, n, cell, start, fill, order)
         self._launch(D.order_cells, ncells + 1, start, order)
@@ -487,8 +495,7 @@ class CudaSimulation:
         d = self.d
         nb_start, nb_idx = self._nb
         if self.d_aux.shape[1] != self.n:
-            self.d_aux = self.cuda.to_device(np.zeros((len(self.module.AUX), self.n),
-                                                      dtype=self.dtype))
+            self.d_aux = self.zeros((len(self.module.AUX), self.n), self.dtype)
         args = (*(d[k] for k in self._f8), *(d[vel] for _, vel in components_of(self.dim)),
                 d["rho"], d["p"], d["c"], d["m"], d["kind"], nb_start, nb_idx, self.d_prm,
                 self.d_aux, self.d_fld)
