@@ -80,8 +80,11 @@ def wall_field_kernel(function):
     key = id(function)
     if key not in _FIELD_KERNELS:
         glb = dict(_wall_field.__globals__, wall_function=device_function(function))
-        _FIELD_KERNELS[key] = cuda.jit(types.FunctionType(_wall_field.__code__, glb,
-                                                          "wall_field"))
+        kernel = cuda.jit(types.FunctionType(_wall_field.__code__, glb, "wall_field"))
+        py = getattr(function, "py_func", function)
+        #: how to make it again (the PTX check, :mod:`sphfoam.engine.cuda.ptx`)
+        kernel.made_by = (__name__, "wall_field_kernel", py.__module__, py.__name__)
+        _FIELD_KERNELS[key] = kernel
     return _FIELD_KERNELS[key]
 
 

@@ -2,11 +2,12 @@
 capability, on a machine with no GPU: what numba's simulator cannot show, that the
 generated code is device code.
 
-    python -m sphfoam.engine.cuda.ptx CASE [CASE ...] [--dx DX] [--cc 9.0]
+    python -m sphfoam.engine.cuda.ptx CASE [CASE ...] [--dx DX] [--cc 9.0] [--edits JSON]
 
 Per case (a case directory, or a tutorial's name), in a child process under numba's
 simulator (``NUMBA_ENABLE_CUDASIM=1``): the case set up at a coarse ``--dx`` and two steps
-of the CUDA backend (and one density filter where the case selects one), recording each
+of the CUDA backend (and one density filter where the case selects one, one health check
+and one kept snapshot, as the time loop makes them), recording each
 kernel launched with the numba types of its arguments, as a device launch would type them.
 Then, in this process (no simulator, no driver): each recorded kernel compiled with
 ``numba.cuda.compile_ptx`` for ``--cc`` (default 9.0, the H100/H200). Needs NVIDIA's NVVM
@@ -19,6 +20,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import json
 import os
 import pickle
 import subprocess
@@ -29,9 +31,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[3]
 
 
-def _record(case_src: Path, dx: float | None, out: Path) -> None:
+def _record(case_src: Path, dx: float | None, out: Path, edits: dict) -> None:
     """(child, under the simulator) Run two steps and pickle the launches:
-    [(module name, file, kernel name, argument types)], each kernel once per signature."""
+    [(module name, file, kernel name, argument types, the factory that made it or None)],
+    each kernel once per signature."""
     import numba
     from numba.cuda.simulator.kernel import FakeCUDAKernel
 
@@ -42,7 +45,9 @@ def _record(case_src: Path, dx: float | None, out: Path) -> None:
         if not self._device:
             fn = self.fn
             sig = tuple(numba.typeof(a) for a in args)
-            launches[(fn.__module__, fn.__code__.co_filename, fn.__name__, sig)] = None
+            made_by = getattr(self, "made_by", None)      # a kernel a factory made
+            launches[(fn.__module__, fn.__code__.co_filename, fn.__name__, sig,
+                      made_by)] = None
         return call(self, *args)
 
     FakeCUDAKernel.__call__ = recording
@@ -54,7 +59,7 @@ def _record(case_src: Path, dx: float | None, out: Path) -> None:
     from sphfoam.setup import setup_case
 
     with tempfile.TemporaryDirectory() as tmp:
-        edits = {"system/controlDict:functions": {}}
+        edits = {"system/controlDict:functions": {}, **edits}
         if dx:
             edits["system/particleDict:dx"] = dx
         d = clone_case(case_src, Path(tmp) / case_src.name, edits)
@@ -66,6 +71,8 @@ def _record(case_src: Path, dx: float | None, out: Path) -> None:
             sim.step()
         if getattr(sim.module, "HAS_FILTER", False):
             sim.filter_density()
+        sim.health_scan(0.0, 1e30, 1e30)          # the time loop's checks
+        sim.keep_snapshot(None)
     out.write_bytes(pickle.dumps(list(launches)))
 
 
@@ -98,10 +105,16 @@ def compile_launches(launches, cc=(9, 0)) -> list[tuple[str, str]]:
 
     _pretend_device(cc)
     out = []
-    for modname, path, name, sig in launches:
+    for modname, path, name, sig, made_by in launches:
         label = f"{modname.rsplit('.', 1)[-1][:28]}.{name}"
         try:
-            kernel = getattr(_module(modname, path), name)
+            if made_by:
+                fmod, factory, amod, arg = made_by
+                kernel = getattr(importlib.import_module(fmod), factory)(
+                    getattr(importlib.import_module(amod), arg))
+                label += f"({arg})"
+            else:
+                kernel = getattr(_module(modname, path), name)
             ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
             ok = f".target sm_{cc[0]}{cc[1]}" in ptx
             out.append((label, "ok" if ok else "no target line in the PTX"))
@@ -110,13 +123,13 @@ def compile_launches(launches, cc=(9, 0)) -> list[tuple[str, str]]:
     return out
 
 
-def check_case(src: Path, dx: float | None, cc) -> list[tuple[str, str]]:
+def check_case(src: Path, dx: float | None, cc, edits: str = "{}") -> list[tuple[str, str]]:
     with tempfile.TemporaryDirectory() as tmp:
         rec = Path(tmp) / "launches.pkl"
         env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1",
                    PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
         cmd = [sys.executable, "-m", "sphfoam.engine.cuda.ptx", "--record", str(src),
-               "--to", str(rec)] + (["--dx", str(dx)] if dx else [])
+               "--to", str(rec), "--edits", edits] + (["--dx", str(dx)] if dx else [])
         p = subprocess.run(cmd, env=env, capture_output=True, text=True)
         if p.returncode or not rec.exists():
             return [("(recording under the simulator)",
@@ -129,6 +142,8 @@ def main(argv=None) -> int:
     ap.add_argument("cases", nargs="+")
     ap.add_argument("--dx", type=float, default=None)
     ap.add_argument("--cc", default="9.0")
+    ap.add_argument("--edits", default="{}", help="edits of the case as JSON "
+                    "({\"file:key.sub\": value}), applied to every case")
     ap.add_argument("--record", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--to", default=None, help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
@@ -140,12 +155,12 @@ def main(argv=None) -> int:
                       if (q / c).exists()), p)
         srcs.append(p)
     if a.record:
-        _record(srcs[0], a.dx, Path(a.to))
+        _record(srcs[0], a.dx, Path(a.to), json.loads(a.edits))
         return 0
     cc = tuple(int(x) for x in a.cc.split("."))
     failed = 0
     for src in srcs:
-        for label, status in check_case(src, a.dx, cc):
+        for label, status in check_case(src, a.dx, cc, a.edits):
             print(f"{src.name}: {label}: {status}", flush=True)
             failed += status != "ok"
     return 1 if failed else 0
