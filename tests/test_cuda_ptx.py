@@ -1,6 +1,6 @@
 """The CUDA backend's kernels compile to PTX for sm_90 (the H100/H200) with no GPU
-(:mod:`sphfoam.engine.cuda.ptx`): the matched dam break's every launched kernel here; every
-tutorial's with ``python -m sphfoam.engine.cuda.ptx TUTORIAL ...`` (the separate check,
+(:mod:`sphfoam.cudaptx`): the matched dam break's every launched kernel here; every
+tutorial's with ``python -m sphfoam.cudaptx TUTORIAL ...`` (the separate check,
 docs/developing.md). Needs NVIDIA's NVVM, which numba-cuda's CUDA 13 wheels bring; skipped
 where it is missing."""
 
@@ -32,7 +32,7 @@ def _nvvm() -> bool:
 def test_every_launched_kernel_compiles_to_sm90_ptx():
     env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_NUM_THREADS="1")
     env.pop("NUMBA_ENABLE_CUDASIM", None)
-    p = subprocess.run([sys.executable, "-m", "sphfoam.engine.cuda.ptx", "damBreakMatched",
+    p = subprocess.run([sys.executable, "-m", "sphfoam.cudaptx", "damBreakMatched",
                         "--dx", "0.1", "--cc", "9.0"], env=env, capture_output=True,
                        text=True, timeout=900)
     lines = p.stdout.splitlines()

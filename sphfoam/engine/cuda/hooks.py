@@ -82,7 +82,7 @@ def wall_field_kernel(function):
         glb = dict(_wall_field.__globals__, wall_function=device_function(function))
         kernel = cuda.jit(types.FunctionType(_wall_field.__code__, glb, "wall_field"))
         py = getattr(function, "py_func", function)
-        #: how to make it again (the PTX check, :mod:`sphfoam.engine.cuda.ptx`)
+        #: how to make it again (the PTX check, :mod:`sphfoam.cudaptx`)
         kernel.made_by = (__name__, "wall_field_kernel", py.__module__, py.__name__)
         _FIELD_KERNELS[key] = kernel
     return _FIELD_KERNELS[key]

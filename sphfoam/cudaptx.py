@@ -2,7 +2,7 @@
 capability, on a machine with no GPU: what numba's simulator cannot show, that the
 generated code is device code.
 
-    python -m sphfoam.engine.cuda.ptx CASE [CASE ...] [--dx DX] [--cc 9.0] [--edits JSON]
+    python -m sphfoam.cudaptx CASE [CASE ...] [--dx DX] [--cc 9.0] [--edits JSON]
 
 Per case (a case directory, or a tutorial's name), in a child process under numba's
 simulator (``NUMBA_ENABLE_CUDASIM=1``): the case set up at a coarse ``--dx`` and two steps
@@ -28,7 +28,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[3]
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _record(case_src: Path, dx: float | None, out: Path, edits: dict) -> None:
@@ -128,7 +128,7 @@ def check_case(src: Path, dx: float | None, cc, edits: str = "{}") -> list[tuple
         rec = Path(tmp) / "launches.pkl"
         env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1",
                    PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-        cmd = [sys.executable, "-m", "sphfoam.engine.cuda.ptx", "--record", str(src),
+        cmd = [sys.executable, "-m", "sphfoam.cudaptx", "--record", str(src),
                "--to", str(rec), "--edits", edits] + (["--dx", str(dx)] if dx else [])
         p = subprocess.run(cmd, env=env, capture_output=True, text=True)
         if p.returncode or not rec.exists():
