@@ -3,6 +3,7 @@ capability, on a machine with no GPU: what numba's simulator cannot show, that t
 generated code is device code.
 
     python -m sphfoam.cudaptx CASE [CASE ...] [--dx DX] [--cc 9.0] [--edits JSON]
+    python -m sphfoam.cudaptx --every-model [--cc 9.0]
 
 Per case (a case directory, or a tutorial's name), in a child process under numba's
 simulator (``NUMBA_ENABLE_CUDASIM=1``): the case set up at a coarse ``--dx`` and two steps
@@ -12,7 +13,9 @@ kernel launched with the numba types of its arguments, as a device launch would 
 Then, in this process (no simulator, no driver): each recorded kernel compiled with
 ``numba.cuda.compile_ptx`` for ``--cc`` (default 9.0, the H100/H200). Needs NVIDIA's NVVM
 (``pip install "numba-cuda[cu13]"``, or the ``nvidia-nvvm`` wheel). Prints one line per
-kernel and exits 1 when one fails.
+kernel and exits 1 when one fails. ``--every-model``: the dam break at dx 0.1 once per
+registered pipeline model (each in place of the tutorial's choice of its family; the
+integrators likewise; single precision once), every kernel of each.
 """
 
 from __future__ import annotations
@@ -137,9 +140,39 @@ def check_case(src: Path, dx: float | None, cc, edits: str = "{}") -> list[tuple
         return compile_launches(pickle.loads(rec.read_bytes()), cc)
 
 
+#: where each family is chosen (``constant/sphProperties`` unless named)
+_FAMILY_FILE = {"integrator": "system/sphSchemes"}
+#: models that need a partner in another family
+_PARTNERS = {("continuity", "riemann"): {"momentum": "riemann"},
+             ("momentum", "riemann"): {"continuity": "riemann"}}
+#: families of the pipeline (the others, e.g. wave makers, are not kernels' code)
+_FAMILIES = ("kernel", "continuity", "momentum", "viscosity", "turbulence", "boundary",
+             "densityFilter", "velocityCorrection", "kernelCorrection", "particleShifting",
+             "integrator")
+
+
+def every_model_edits() -> list[tuple[str, dict]]:
+    """(label, edits of the dam break) selecting each registered pipeline model once."""
+    from sphfoam import registry
+
+    out = []
+    for family in _FAMILIES:
+        for name in sorted(registry.families().get(family, {})):
+            if name == "none":
+                continue
+            edits = {}
+            for fam, other in {family: name, **_PARTNERS.get((family, name), {})}.items():
+                f = _FAMILY_FILE.get(fam, "constant/sphProperties")
+                edits[f"{f}:{fam}"] = {"type": other}
+            out.append((f"{family} {name}", edits))
+    out.append(("precision single", {"system/sphSchemes:precision": "single"}))
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("cases", nargs="+")
+    ap.add_argument("cases", nargs="*")
+    ap.add_argument("--every-model", action="store_true")
     ap.add_argument("--dx", type=float, default=None)
     ap.add_argument("--cc", default="9.0")
     ap.add_argument("--edits", default="{}", help="edits of the case as JSON "
@@ -159,6 +192,14 @@ def main(argv=None) -> int:
         return 0
     cc = tuple(int(x) for x in a.cc.split("."))
     failed = 0
+    if a.every_model:
+        src = ROOT / "tutorials" / "damBreak"
+        for label, edits in every_model_edits():
+            res = check_case(src, a.dx or 0.1, cc, json.dumps(edits))
+            bad = [f"{k}: {v}" for k, v in res if v != "ok"]
+            print(f"{label}: {len(res) - len(bad)} kernels ok" +
+                  (f"; FAILED {'; '.join(bad)}" if bad else ""), flush=True)
+            failed += bool(bad)
     for src in srcs:
         for label, status in check_case(src, a.dx, cc, a.edits):
             print(f"{src.name}: {label}: {status}", flush=True)

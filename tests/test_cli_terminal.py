@@ -57,7 +57,8 @@ def _main(env_extra: dict, *args) -> subprocess.CompletedProcess:
 
 def test_shell_completion():
     r = runner.invoke(app, ["--show-completion", "bash"], prog_name="sphfoam")
-    assert r.exit_code == 0 and "complete -o default -F _sphfoam_completion sphfoam" in r.output
+    assert r.exit_code == 0 and "complete -o default -F _sphfoam_completion sphfoam" in \
+        r.output, (r.output, repr(r.exception))
     assert "--install-completion" in runner.invoke(app, ["--help"]).output
     r = _main({"_SPHFOAM_COMPLETE": "complete_bash", "COMP_WORDS": "sphfoam ren",
                "COMP_CWORD": "1"})
