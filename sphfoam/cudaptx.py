@@ -12,7 +12,7 @@ and one kept snapshot, as the time loop makes them), recording each
 kernel launched with the numba types of its arguments, as a device launch would type them.
 Then, in this process (no simulator, no driver): each recorded kernel compiled with
 ``numba.cuda.compile_ptx`` for ``--cc`` (default 9.0, the H100/H200). Needs NVIDIA's NVVM
-(``pip install "numba-cuda[cu13]"``, or the ``nvidia-nvvm`` wheel). Prints one line per
+and NVRTC (``pip install "numba-cuda[cu13]"``). Prints one line per
 kernel and exits 1 when one fails. ``--every-model``: the dam break at dx 0.1 once per
 registered pipeline model (each in place of the tutorial's choice of its family; the
 integrators likewise; single precision once), every kernel of each.

@@ -1,8 +1,8 @@
 """The CUDA backend's kernels compile to PTX for sm_90 (the H100/H200) with no GPU
 (:mod:`sphfoam.cudaptx`): the matched dam break's every launched kernel here; every
 tutorial's with ``python -m sphfoam.cudaptx TUTORIAL ...`` (the separate check,
-docs/developing.md). Needs NVIDIA's NVVM, which numba-cuda's CUDA 13 wheels bring; skipped
-where it is missing."""
+docs/developing.md). Needs NVIDIA's NVVM and NVRTC (``pip install "numba-cuda[cu13]"``);
+skipped, saying why, where they are missing."""
 
 from __future__ import annotations
 
@@ -18,17 +18,34 @@ pytest.importorskip("numba.cuda")
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _nvvm() -> bool:
-    try:
-        from numba.cuda.cudadrv.nvvm import NVVM
+_PROBE = """
+from numba import cuda, types
+from sphfoam.cudaptx import _pretend_device
+_pretend_device((9, 0))
+twice = cuda.jit(device=True)(lambda v: 2.0 * v)
+def k(a):
+    i = cuda.grid(1)
+    if i < a.shape[0]:
+        a[i] = twice(a[i])
+cuda.compile_ptx(k, (types.float64[::1],), cc=(9, 0))
+"""
 
-        NVVM()
-    except Exception:  # noqa: BLE001  (no NVVM library: nothing to compile with)
-        return False
-    return True
+
+def _toolchain() -> str:
+    """'' where NVVM and NVRTC compile a kernel calling a device function for sm_90 (in a
+    subprocess, as the check does), else why not."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop("NUMBA_ENABLE_CUDASIM", None)
+    p = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True,
+                       text=True, timeout=300)
+    return "" if p.returncode == 0 else (p.stderr.strip().splitlines() or ["failed"])[-1]
 
 
-@pytest.mark.skipif(not _nvvm(), reason="no NVVM (pip install 'numba-cuda[cu13]')")
+_WHY_NOT = _toolchain()
+
+
+@pytest.mark.skipif(bool(_WHY_NOT), reason="no NVVM/NVRTC to compile with (pip install "
+                    f"'numba-cuda[cu13]'): {_WHY_NOT[:200]}")
 def test_every_launched_kernel_compiles_to_sm90_ptx():
     env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_NUM_THREADS="1")
     env.pop("NUMBA_ENABLE_CUDASIM", None)
