@@ -7,17 +7,18 @@ there instead of the hook; a hook with no declared form keeps the model off that
 (refused by name, :func:`uncovered`). The shapes:
 
 * :class:`AdvectionCorrection`: ``advection_velocity``, positions move with U + dU, dU an
-  auxiliary field of the last pre-pass (XSPH T(3.62), a shifting's delta_u), fluid only;
+  auxiliary field of the last pre-pass (a velocity correction or shift), fluid only;
 * :class:`AuxAddition`: ``after_rates``, ``after_density_rate`` or ``after_step``, a state
   array plus an auxiliary field (times the step just taken, for ``after_step``);
 * :class:`WallField`: ``attach``, ``before_neighbours``, ``walls_moved`` and
   ``keeps_neighbours``, a particle field that is a function of the position and the walls'
   segments, at every build of the neighbour list (e.g. the distance from the wall lines);
 * :class:`WallVelocity`: ``attach``, ``walls_moved``, ``before_evaluation`` and
-  ``after_step``, the wall particles' prescribed velocity put back (Adami's boundary).
+  ``after_step``, the wall particles' prescribed velocity put back (a boundary whose
+  prepass overwrites it).
 
-Names hold ``@`` for the components as the terms write them (``xsph_dU@``: xsph_du,
-xsph_dv (, xsph_dw); ``a@``: ax, ay (, az)); :func:`sphfoam.engine.stepping.components`
+Names hold ``@`` for the components as the terms write them (``p_dU@``: p_du, p_dv
+(, p_dw); ``a@``: ax, ay (, az)); :func:`sphfoam.engine.stepping.components`
 writes them out for a dimension.
 """
 
