@@ -98,10 +98,12 @@ class CudaPipeline:
         """The equation of state on host arrays (diagnostics): copied there and back."""
         from numba import cuda
 
+        from sphfoam.engine.cuda.device import THREADS, blocks
+
         d = [cuda.to_device(np.ascontiguousarray(a, dtype=self.prm.dtype))
              for a in (rho, p, c)]
         n = rho.shape[0]
-        self.module.equation_of_state[max(1, (n + 127) // 128), 128](*d, cuda.to_device(prm))
+        self.module.equation_of_state[blocks(n), THREADS](*d, cuda.to_device(prm))
         p[:] = d[1].copy_to_host()
         c[:] = d[2].copy_to_host()
 

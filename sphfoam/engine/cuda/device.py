@@ -218,13 +218,40 @@ def permute_rows(src, order, dst):
 
 
 # --- reductions (min and max are exact: the result does not depend on the order) -----------
+MIN, MAX, SUM = 0, 1, 2
+
+
+@cuda.jit(device=True)
+def _combine(a, b, op):
+    if op == MIN:
+        return min(a, b)
+    if op == MAX:
+        return max(a, b)
+    return a + b
+
+
+@cuda.jit(device=True)
+def tree_reduce(sa, sb, t, op_a, op_b):
+    """Two block reductions at once in shared memory, a fixed tree (so a sum's order does not
+    depend on the scheduling): sa[0] = op_a over sa, sb[0] = op_b over sb (MIN, MAX or SUM).
+    Every thread of the block calls it after writing its own sa[t], sb[t]."""
+    cuda.syncthreads()
+    s = THREADS // 2
+    while s > 0:
+        if t < s:
+            sa[t] = _combine(sa[t], sa[t + s], op_a)
+            sb[t] = _combine(sb[t], sb[t + s], op_b)
+        cuda.syncthreads()
+        s //= 2
+
+
 @cuda.jit
 def time_step_reduce(h, c, sigma, ax, ay, az, three, kind, out):
     """out[0] = min over fluid particles of h / (c_a + sigma_a), T(3.89); out[1] = max of
     |F_a|^2 for T(3.90) (with ``az`` where ``three``). Per block in shared memory, then one
     atomic per block."""
-    smin = cuda.shared.array(128, dtype=np.float64)
-    smax = cuda.shared.array(128, dtype=np.float64)
+    smin = cuda.shared.array(THREADS, dtype=np.float64)
+    smax = cuda.shared.array(THREADS, dtype=np.float64)
     a = cuda.grid(1)
     t = cuda.threadIdx.x
     dmin = math.inf
@@ -236,14 +263,7 @@ def time_step_reduce(h, c, sigma, ax, ay, az, three, kind, out):
             fmax += az[a] * az[a]
     smin[t] = dmin
     smax[t] = fmax
-    cuda.syncthreads()
-    s = 64
-    while s > 0:
-        if t < s:
-            smin[t] = min(smin[t], smin[t + s])
-            smax[t] = max(smax[t], smax[t + s])
-        cuda.syncthreads()
-        s //= 2
+    tree_reduce(smin, smax, t, MIN, MAX)
     if t == 0:
         cuda.atomic.min(out, 0, smin[0])
         cuda.atomic.max(out, 1, smax[0])
@@ -256,8 +276,8 @@ def displacement_reduce(x, y, z, xr, yr, zr, u, v, w, x0, y0, z0, x1, y1, z1, lx
     out[1] = max speed^2, out[2] = 1 if a particle is outside the box [x0, x1) x [y0, y1)
     (x [z0, z1)) or not finite (a NaN counts as an infinite displacement). ``three``: a
     third axis (else ``z``, ``zr``, ``w`` are not read)."""
-    sd = cuda.shared.array(128, dtype=np.float64)
-    sv = cuda.shared.array(128, dtype=np.float64)
+    sd = cuda.shared.array(THREADS, dtype=np.float64)
+    sv = cuda.shared.array(THREADS, dtype=np.float64)
     a = cuda.grid(1)
     t = cuda.threadIdx.x
     d2 = 0.0
@@ -284,14 +304,7 @@ def displacement_reduce(x, y, z, xr, yr, zr, u, v, w, x0, y0, z0, x1, y1, z1, lx
             v2 = math.inf
     sd[t] = d2
     sv[t] = v2
-    cuda.syncthreads()
-    s = 64
-    while s > 0:
-        if t < s:
-            sd[t] = max(sd[t], sd[t + s])
-            sv[t] = max(sv[t], sv[t + s])
-        cuda.syncthreads()
-        s //= 2
+    tree_reduce(sd, sv, t, MAX, MAX)
     if t == 0:
         cuda.atomic.max(out, 0, sd[0])
         cuda.atomic.max(out, 1, sv[0])
@@ -326,8 +339,8 @@ def health_reduce(x, y, z, u, v, w, rho, m, kind, three, rho_lo, rho_hi, speed2_
     energy and mass in a fixed order (:func:`sum_partials` adds the blocks into ``acc[5:7]``,
     so the sums do not depend on the scheduling). ``three``: z and w are read (else they
     stand for y and v and are not)."""
-    ske = cuda.shared.array(128, dtype=np.float64)
-    sm = cuda.shared.array(128, dtype=np.float64)
+    ske = cuda.shared.array(THREADS, dtype=np.float64)
+    sm = cuda.shared.array(THREADS, dtype=np.float64)
     a = cuda.grid(1)
     t = cuda.threadIdx.x
     ke = 0.0
@@ -352,14 +365,7 @@ def health_reduce(x, y, z, u, v, w, rho, m, kind, three, rho_lo, rho_hi, speed2_
             mass = float(m[a])
     ske[t] = ke
     sm[t] = mass
-    cuda.syncthreads()
-    s = 64
-    while s > 0:
-        if t < s:
-            ske[t] += ske[t + s]
-            sm[t] += sm[t + s]
-        cuda.syncthreads()
-        s //= 2
+    tree_reduce(ske, sm, t, SUM, SUM)
     if t == 0:
         partial[cuda.blockIdx.x, 0] = ske[0]
         partial[cuda.blockIdx.x, 1] = sm[0]
@@ -369,24 +375,17 @@ def health_reduce(x, y, z, u, v, w, rho, m, kind, three, rho_lo, rho_hi, speed2_
 def sum_partials(partial, out):
     """out[5 + j] = sum over the blocks of partial[:, j] (one block: each thread a fixed
     stride, then a fixed tree)."""
-    s0 = cuda.shared.array(128, dtype=np.float64)
-    s1 = cuda.shared.array(128, dtype=np.float64)
+    s0 = cuda.shared.array(THREADS, dtype=np.float64)
+    s1 = cuda.shared.array(THREADS, dtype=np.float64)
     t = cuda.threadIdx.x
     a0 = 0.0
     a1 = 0.0
-    for i in range(t, partial.shape[0], 128):
+    for i in range(t, partial.shape[0], THREADS):
         a0 += partial[i, 0]
         a1 += partial[i, 1]
     s0[t] = a0
     s1[t] = a1
-    cuda.syncthreads()
-    s = 64
-    while s > 0:
-        if t < s:
-            s0[t] += s0[t + s]
-            s1[t] += s1[t + s]
-        cuda.syncthreads()
-        s //= 2
+    tree_reduce(s0, s1, t, SUM, SUM)
     if t == 0:
         out[5] = s0[0]
         out[6] = s1[0]
