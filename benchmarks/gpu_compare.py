@@ -40,14 +40,9 @@ CASES = [
     ("poiseuille", "poiseuille", None, 300, {}),
     ("turbulentChannel", "turbulentChannel", None, 300, {}),
     # the hooks' declared forms together: Adami's walls, XSPH, delta+ shifting with its
-    # velocity, density and mass corrections (surfaceLambda 0: see tests/test_cuda_backend)
-    ("adami + xsph + deltaPlusShifting", "damBreakMatched", 0.04, 300, {
-        "system/sphSchemes:integrator": {"type": "monaghan2007"},
-        "constant/sphProperties:boundary": {"type": "adami"},
-        "constant/sphProperties:velocityCorrection": {"type": "xsph"},
-        "constant/sphProperties:particleShifting": {
-            "type": "deltaPlusShifting", "surfaceLambda": 0, "correctVelocity": "yes",
-            "correctDensity": "yes", "correctMass": "yes"}}),
+    # velocity, density and mass corrections (the suite's row: tests/test_cuda_backend.py)
+    ("adami + xsph + deltaPlusShifting", "damBreakMatched", 0.04, 300,
+     json.loads((ROOT / "tests" / "cuda_hook_forms.json").read_text())),
     ("solitaryBeach", "solitaryBeach", 0.05, 300, {}),
     ("solitaryCollision", "solitaryCollision", 1.25, 300, {}),
     ("solitaryWallRunup", "solitaryWallRunup", 1.25, 300, {}),

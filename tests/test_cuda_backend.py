@@ -108,14 +108,11 @@ _CHANNEL = {"system/particleDict:fluid.channel.max": [0.3, 0.4875],
             "system/particleDict:domain.max": [0.3, 0.6],
             "constant/sphProperties:turbulence.outerLength": 0.25}
 
+#: the hooks' declared forms together (also benchmarks/gpu_compare.py's row)
+HOOK_FORMS = json.loads((ROOT / "tests" / "cuda_hook_forms.json").read_text())
+
 HOOK_CASES = [
-    ("damBreakMatched", 0.2, 3, {
-        "system/sphSchemes:integrator": {"type": "monaghan2007"},
-        "constant/sphProperties:boundary": {"type": "adami"},
-        "constant/sphProperties:velocityCorrection": {"type": "xsph"},
-        "constant/sphProperties:particleShifting": {
-            "type": "deltaPlusShifting", "surfaceLambda": 0, "correctVelocity": "yes",
-            "correctDensity": "yes", "correctMass": "yes"}}),
+    ("damBreakMatched", 0.2, 3, HOOK_FORMS),
     pytest.param("turbulentChannel", None, 3, _CHANNEL, marks=_SLOW),
     # Adami's walls on a 3 m flume with the paddle's motion: its wall entry's velocity put
     # back on the paddle's particles (walls_moved), 35 s
