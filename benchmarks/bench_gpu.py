@@ -99,9 +99,9 @@ def _device_bytes(sim) -> int:
     return int(sum(a.nbytes for a in arrays))
 
 
-def _window(sim, cuda, steps: int, rebuild: bool) -> dict:
-    evals = getattr(sim.integrator, "force_evaluations_per_step", 1)
-    h2d, d2h, built = sim.bytes_h2d, sim.bytes_d2h, sim.list_built
+def _steps(sim, cuda, steps: int, rebuild: bool) -> tuple[float, int]:
+    """``steps`` steps (the list rebuilt before each where ``rebuild``), synchronised at
+    both ends: (wall seconds, listed pairs summed over the steps)."""
     pairs = 0
     cuda.synchronize()
     t0 = time.perf_counter()
@@ -111,7 +111,13 @@ def _window(sim, cuda, steps: int, rebuild: bool) -> dict:
         sim.step()
         pairs += sim.pairs
     cuda.synchronize()
-    wall = time.perf_counter() - t0
+    return time.perf_counter() - t0, pairs
+
+
+def _window(sim, cuda, steps: int, rebuild: bool) -> dict:
+    evals = getattr(sim.integrator, "force_evaluations_per_step", 1)
+    h2d, d2h, built = sim.bytes_h2d, sim.bytes_d2h, sim.list_built
+    wall, pairs = _steps(sim, cuda, steps, rebuild)
     return dict(step_ms=1e3 * wall / steps, particle_steps_per_s=sim.n * steps / wall,
                 listed_pairs_per_s=pairs * evals / wall, lists_built=sim.list_built - built,
                 h2d_bytes_per_step=(sim.bytes_h2d - h2d) / steps,
@@ -145,16 +151,9 @@ def bench_cuda(tmp: Path, dim: int, n: int, state, precision: str, steps: int) -
     out["device_bytes_per_particle"] = _device_bytes(sim) / sim.n
     out["device_memory_used_per_particle"] = \
         (free0 - cuda.current_context().get_memory_info()[0]) / sim.n
-    sim.timers = {}
     for rebuild in (False, True):
         sim.timers = {}
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            if rebuild:
-                sim.invalidate_neighbours()
-            sim.step()
-        cuda.synchronize()
-        timed = time.perf_counter() - t0
+        timed, _ = _steps(sim, cuda, steps, rebuild)
         key = "stages_rebuilt" if rebuild else "stages_kept"
         out[key] = {k: 1e3 * v / steps for k, v in sorted(sim.timers.items())}
         out[key]["total"] = 1e3 * timed / steps
