@@ -10,6 +10,25 @@ from sphfoam.case.edit import clone_case, set_entry  # noqa: F401  (re-exported)
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"
 
+#: P's set-up of the wall case (P section 4: the finite Gaussian, XSPH, MLS every 20 steps, the
+#: mirrored bed's p_G = p_a, the KdV2 wave, P's predictor-corrector), the wall tutorial's
+#: default until issue 35's convergence study; as the study dictionaries' set blocks
+P_WALL = {
+    "constant/sphProperties:kernel": {"type": "gaussian", "hdx": 1.3333333},
+    "constant/sphProperties:velocityCorrection": {"type": "xsph", "epsilon": 0.5},
+    "constant/sphProperties:densityFilter": {"type": "mlsReinitialisation", "every": 20},
+    "constant/sphProperties:particleShifting": {"type": "none"},
+    "constant/sphProperties:boundary.pressure": "mirror",
+    "constant/waveProperties:waves.incident.theory": "kdv2",
+    "system/sphSchemes:integrator": {"type": "predictorCorrector"},
+}
+
+
+@pytest.fixture
+def p_wall() -> dict:
+    """The edits that give the wall tutorial P's set-up (:data:`P_WALL`)."""
+    return dict(P_WALL)
+
 
 @pytest.fixture
 def tutorial(tmp_path):

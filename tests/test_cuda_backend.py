@@ -163,13 +163,13 @@ def test_mirror_kernels_match_the_cpu_loops_under_the_simulator():
         assert res[k] < 1e-6, (k, res)
 
 
-def test_free_slip_mirror_ghosts_and_xsph_match_cpu_under_the_simulator():
-    """solitaryWallRunup's mirrorGhosts (free slip, p_G = p_a: T(3.77)-(3.80) as printed)
-    and XSPH at dx = 5 m (104 particles, 136 ghosts), with a skin of 0.2 % of the support:
+def test_free_slip_mirror_ghosts_and_xsph_match_cpu_under_the_simulator(p_wall):
+    """solitaryWallRunup with P's set-up: mirrorGhosts (free slip, p_G = p_a: T(3.77)-(3.80)
+    as printed) and XSPH at dx = 5 m (104 particles, 136 ghosts), with a skin of 0.2 % of the support:
     the list built at every step (the last build's ghosts retired among the particles, new
     ones made, sorted and mapped through the sort)."""
     res = _compare("solitaryWallRunup", 5.0, 3,
-                   {"system/sphSchemes:neighbourSearch.cellSizeFactor": 1.002})
+                   {**p_wall, "system/sphSchemes:neighbourSearch.cellSizeFactor": 1.002})
     _assert_matches(res)
     assert res["built"] == [3, 3], res
     assert res["ghosts"][0] == res["ghosts"][1] > 0, res
