@@ -7,8 +7,9 @@ potential flow itself, so that SPH is measured against the equations it discreti
 than against a truncated expansion.
 
 Method (up to a = 0.4): the higher-order spectral (HOS) method of West et al. (1987, JGR 92
-C11, eqs. 4-11; Dommermuth & Yue 1987) in finite depth, units g = d = 1, on a periodic domain holding the
-incident wave at x = -X0 and its mirror image at +X0 (eta even, psi even). With
+C11, eqs. 4-11; Dommermuth & Yue 1987) in finite depth, units g = d = 1, on a periodic
+domain holding the incident wave at x = -X0 and its mirror image at +X0 (eta even, psi
+even). With
 psi(x, t) = phi(x, eta, t) the surface potential and W = phi_z at the surface, Zakharov's
 equations
 
@@ -42,16 +43,16 @@ even). Where both converge they agree (N = 1024, dt = 0.05, decay 16):
     0.4    0.9234518      0.9230135      0.9237212      (HOS with kmax 16: 0.9222061)
 
 (2e-5 relative at 0.3, 3e-4 at 0.4, where HOS itself moves by 1e-3 with kmax). At a = 0.5
-the boundary integral gives R/d = 1.23839 (+-1e-5): 1.2383853 at N = 1024 (the default,
-dt = 0.05, start decay 16), 1.2383876 at N = 2048, 1.2383909 at dt = 0.025, 1.2383850 and
+the boundary integral gives R/d = 1.23839 (+-1e-5): 1.2383853 at N = 1024 (the default, dt =
+0.05, start decay 16), 1.2383876 at N = 2048, 1.2383909 at dt = 0.025, 1.2383850 and
 1.2383848 with the start at decay 20 and 24 (N scaled with L); the volume is conserved to
-3e-16 (at a = 0.45, N = 1024: 1.07213, 0.24 % above the third order). It lies 1.6 % above
-Su & Mirie's third order (1.21875): the run-up's crest is sharp,
-and a filter at kmax = 8/d cuts it to 1.2274 (12/d: 1.2358, 16/d: 1.2376). The default
-call takes about 30 s on one core. At a = 0.6 the crest at the wall steepens (slope 1.2,
-against 0.75 at a = 0.5) at its peak and the computation blows up on 1024 points, so ``method="bie"`` stops at
-MAX_EPS_BIE = 0.5. :func:`propagate` with ``method="bie"`` carries the exact wave at
-a = 0.5 over 20 sqrt(d/g) with max |eta - exact| = 1.6e-6 d (N = 1024, dt = 0.05).
+3e-16 (at a = 0.45, N = 1024: 1.07213, 0.24 % above the third order). It lies 1.6 % above Su
+& Mirie's third order (1.21875): the run-up's crest is sharp, and a filter at kmax = 8/d
+cuts it to 1.2274 (12/d: 1.2358, 16/d: 1.2376). The default call takes about 30 s on one
+core. At a = 0.6 the crest at the wall steepens (slope 1.2, against 0.75 at a = 0.5) at its
+peak and the computation blows up on 1024 points, so ``method="bie"`` stops at MAX_EPS_BIE =
+0.5. :func:`propagate` with ``method="bie"`` carries the exact wave at a = 0.5 over 20
+sqrt(d/g) with max |eta - exact| = 1.6e-6 d (N = 1024, dt = 0.05).
 
 :func:`head_on_collision` does the same for two unequal waves meeting head-on (P's collision
 case, a = 0.3 and 0.2: a peak of 0.53771 d, against a1 + a2 = 0.5 and the third order's 0.54125).
