@@ -41,10 +41,16 @@ def test_run_up_at_p_s_amplitude_is_converged():
     assert r.run_up == pytest.approx(0.66020, abs=1e-4)
 
 
-@pytest.mark.parametrize("eps", [0.0, -0.1, 0.45])
-def test_amplitudes_outside_the_method_are_refused(eps):
+@pytest.mark.parametrize("eps, method", [(0.0, None), (-0.1, None), (0.45, "hos"),
+                                         (0.0, "bie"), (0.55, None), (0.6, "bie")])
+def test_amplitudes_outside_the_method_are_refused(eps, method):
+    """HOS above 0.4 (its series diverges; the default then takes the boundary integral),
+    the boundary integral above MAX_EPS_BIE = 0.5 (at 0.6 the crest at the wall sharpens and
+    the computation blows up)."""
     with pytest.raises(ValueError, match="0 < A/d"):
-        wall_reflection(eps)
+        wall_reflection(eps, method=method)
+    with pytest.raises(ValueError, match="method must be"):
+        wall_reflection(0.3, method="spectral")
 
 
 def test_head_on_collision_of_equal_waves_is_the_wall_and_unequal_meets_third_order():

@@ -6,9 +6,10 @@ R/d = 2a + a^2/2 + 3a^3/4 (Su & Mirie 1980, third order, a = A/d); this module c
 potential flow itself, so that SPH is measured against the equations it discretises rather
 than against a truncated expansion.
 
-Method: the higher-order spectral (HOS) method of West et al. (1987, JGR 92 C11, eqs. 4-11;
-Dommermuth & Yue 1987) in finite depth, units g = d = 1, on a periodic domain holding the
-incident wave at x = -X0 and its mirror image at +X0 (eta even, psi even). With
+Method (up to a = 0.4): the higher-order spectral (HOS) method of West et al. (1987, JGR 92
+C11, eqs. 4-11; Dommermuth & Yue 1987) in finite depth, units g = d = 1, on a periodic
+domain holding the incident wave at x = -X0 and its mirror image at +X0 (eta even, psi
+even). With
 psi(x, t) = phi(x, eta, t) the surface potential and W = phi_z at the surface, Zakharov's
 equations
 
@@ -29,6 +30,30 @@ R/d = 0.10133, 0.20555, 0.42413, 0.66020 and 0.9233 (+-0.001) at a = 0.05, 0.1, 
 0.4: 0.02, 0.10, 0.44, 0.76 and 0.5 % below Su & Mirie's third order. The defaults (order 10,
 modes up to kmax = 8/d) take a few seconds; above a = 0.4 the series stops converging.
 
+Above it, ``method="bie"`` (the default for a > 0.4) computes W exactly to the
+discretisation by a boundary integral (Cauchy's formula for phi + i chi with the bed's
+image, :mod:`sphfoam.reference.boundary_integral`; Vinje & Brevig 1981, Dold 1992, the
+quadrature of Sidi & Israeli 1988) and steps Zakharov's equations in full, with only the
+2/3 rule as filter (a dense solve for chi at x > 0 per stage; the wall makes the state
+even). Where both converge they agree (N = 1024, dt = 0.05, decay 16):
+
+    a      HOS (kmax 8)   BIE (kmax 8)   BIE (2/3 rule)
+    0.1    0.2055528      0.2055528      0.2055528
+    0.3    0.6602009      0.6601968      0.6602131      (HOS with kmax 16: 0.6602154)
+    0.4    0.9234518      0.9230135      0.9237212      (HOS with kmax 16: 0.9222061)
+
+(2e-5 relative at 0.3, 3e-4 at 0.4, where HOS itself moves by 1e-3 with kmax). At a = 0.5
+the boundary integral gives R/d = 1.23839 (+-1e-5): 1.2383853 at N = 1024 (the default, dt =
+0.05, start decay 16), 1.2383876 at N = 2048, 1.2383909 at dt = 0.025, 1.2383850 and
+1.2383848 with the start at decay 20 and 24 (N scaled with L); the volume is conserved to
+3e-16 (at a = 0.45, N = 1024: 1.07213, 0.24 % above the third order). It lies 1.6 % above Su
+& Mirie's third order (1.21875): the run-up's crest is sharp, and a filter at kmax = 8/d
+cuts it to 1.2274 (12/d: 1.2358, 16/d: 1.2376). The default call takes about 30 s on one
+core. At a = 0.6 the crest at the wall steepens (slope 1.2, against 0.75 at a = 0.5) at its
+peak and the computation blows up on 1024 points, so ``method="bie"`` stops at MAX_EPS_BIE =
+0.5. :func:`propagate` with ``method="bie"`` carries the exact wave at a = 0.5 over 20
+sqrt(d/g) with max |eta - exact| = 1.6e-6 d (N = 1024, dt = 0.05).
+
 :func:`head_on_collision` does the same for two unequal waves meeting head-on (P's collision
 case, a = 0.3 and 0.2: a peak of 0.53771 d, against a1 + a2 = 0.5 and the third order's 0.54125).
 
@@ -46,11 +71,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sphfoam.reference.boundary_integral import DirichletToNeumann
 from sphfoam.reference.eulerwave import euler_solution
 
 #: largest A/d: the series converges to 1e-3 d at 0.4 (orders 8-12), to 2e-3 d only at 0.45,
 #: and diverges at 0.5 as the run-up (1.2 d) nears the depth
 MAX_EPS = 0.4
+
+#: largest A/d of the boundary-integral method (``method="bie"``): converged there to 1e-5 d
+#: (see the module docstring); at 0.6 the crest at the wall sharpens at its peak (slope > 1)
+#: and the computation on 1024 points blows up (not established in between: the exact
+#: wave's continuation fails at 0.55)
+MAX_EPS_BIE = 0.5
 
 
 @dataclass(frozen=True)
@@ -60,22 +92,46 @@ class Reflection:
     run_up: float            # R/d, the maximum of eta at the wall
     time: float              # when (units sqrt(d/g)), from the start with the crest at -X0
     X0: float                # the crest's distance from the wall at t = 0 (units d)
-    order: int
+    order: int               # the HOS order (0 for the boundary integral)
     N: int
     dt: float
     volume_drift: float      # |int eta dx (end) - int eta dx (start)| / int eta dx (start)
+    method: str = "hos"      # "hos" or "bie"
+    kmax: float = 8.0        # the filter's wavenumber (inf: 2/3 of the grid's only)
 
 
-class _HOS:
-    """The periodic domain [-L/2, L/2) with N points, the wall (or symmetry plane) at x = 0."""
+class _Zakharov:
+    """The periodic domain [-L/2, L/2) with N points, the wall (or symmetry plane) at x = 0:
+    the filter and the RK4 step of Zakharov's equations; ``rhs`` from the subclass."""
 
-    def __init__(self, L: float, N: int, order: int, kmax: float):
-        self.L, self.N, self.M = L, N, order
+    def __init__(self, L: float, N: int, kmax: float):
+        self.L, self.N = L, N
         self.x = (np.arange(N) - N // 2) * (L / N)
         k = 2.0 * math.pi * np.fft.rfftfreq(N, L / N)
         self.ik = 1j * k
-        self.th = np.tanh(k)
         self.keep = k <= min(kmax, (2.0 / 3.0) * k[-1])
+
+    def filter(self, f):
+        return np.fft.irfft(np.where(self.keep, np.fft.rfft(f), 0.0), self.N)
+
+    def step(self, eta, psi, dt):
+        k1 = self.rhs(eta, psi)
+        k2 = self.rhs(eta + 0.5 * dt * k1[0], psi + 0.5 * dt * k1[1])
+        k3 = self.rhs(eta + 0.5 * dt * k2[0], psi + 0.5 * dt * k2[1])
+        k4 = self.rhs(eta + dt * k3[0], psi + dt * k3[1])
+        eta = eta + dt / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
+        psi = psi + dt / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
+        return eta, psi
+
+
+class _HOS(_Zakharov):
+    """W by West et al.'s order-``order`` expansion about z = 0."""
+
+    def __init__(self, L: float, N: int, order: int, kmax: float):
+        super().__init__(L, N, kmax)
+        self.M = order
+        k = 2.0 * math.pi * np.fft.rfftfreq(N, L / N)
+        self.th = np.tanh(k)
         # d_z^n at z = 0: |k|^n, times tanh(|k|) for odd n
         self.dz = [np.where(self.keep, k**n * (self.th if n % 2 else 1.0), 0.0)
                    for n in range(order + 1)]
@@ -124,17 +180,26 @@ class _HOS:
         dpsi = -eta - 0.5 * px * px + 0.5 * W2 + 0.5 * ex2 * W2low
         return self.filter(deta), self.filter(dpsi)
 
-    def filter(self, f):
-        return np.fft.irfft(np.where(self.keep, np.fft.rfft(f), 0.0), self.N)
 
-    def step(self, eta, psi, dt):
-        k1 = self.rhs(eta, psi)
-        k2 = self.rhs(eta + 0.5 * dt * k1[0], psi + 0.5 * dt * k1[1])
-        k3 = self.rhs(eta + 0.5 * dt * k2[0], psi + 0.5 * dt * k2[1])
-        k4 = self.rhs(eta + dt * k3[0], psi + dt * k3[1])
-        eta = eta + dt / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
-        psi = psi + dt / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
-        return eta, psi
+class _BIE(_Zakharov):
+    """W exact to the discretisation, by the boundary integral of
+    :mod:`sphfoam.reference.boundary_integral`; Zakharov's equations in full. ``even``: the
+    state is even about x = 0 (the wall), and the integral equation is solved on x > 0."""
+
+    def __init__(self, L: float, N: int, kmax: float, even: bool = False):
+        super().__init__(L, N, kmax)
+        self.dtn = DirichletToNeumann(L, N)
+        self.even = even
+
+    def rhs(self, eta, psi):
+        ex = np.fft.irfft(np.fft.rfft(eta) * self.ik, self.N)
+        px = np.fft.irfft(np.fft.rfft(psi) * self.ik, self.N)
+        with np.errstate(over="ignore", invalid="ignore"):   # a blow-up is reported as one
+            W = self.dtn.vertical_velocity(eta, psi, even=self.even, eta_x=ex, psi_x=px)
+        s = 1.0 + ex * ex
+        deta = -ex * px + s * W
+        dpsi = -eta - 0.5 * px * px + 0.5 * s * W * W
+        return self.filter(deta), self.filter(dpsi)
 
 
 def _wave(sol, x):
@@ -156,14 +221,16 @@ def _layout(eps: float, decay: float):
 
 
 def propagate(eps: float, time: float, order: int = 10, N: int = 1024, dt: float = 0.05,
-              decay: float = 16.0, kmax: float = 8.0):
-    """One exact wave carried by the HOS equations for ``time``: returns (x, eta computed,
+              decay: float = 16.0, kmax: float | None = None, method: str = "hos"):
+    """One exact wave carried by Zakharov's equations for ``time``: returns (x, eta computed,
     eta exact at its new place). Their difference measures the method's error. psi steps by
     Delta across one wave, so the periodic domain carries it on a uniform current
     U = -Delta/L (psi + U x is periodic); the equations are Galilean invariant (W does not
-    see U x), so the exact solution is the wave moving at F + U."""
+    see U x), so the exact solution is the wave moving at F + U. ``method``: "hos" (West et
+    al., order ``order``) or "bie" (the boundary integral); ``kmax`` as
+    :func:`wall_reflection`."""
     sol, X0, L = _layout(eps, decay)
-    hos = _HOS(L, N, order, kmax)
+    hos = _solver(method, L, N, order, _kmax(method, kmax))
     eta, psi = _wave(sol, hos.x)
     U = -_psi_step(sol) / L
     psi = psi + U * hos.x
@@ -180,7 +247,41 @@ def _psi_step(sol) -> float:
     return 2.0 * (sol.F - sol.cp) * sol.x_half
 
 
-def _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall: bool):
+def _method(method: str | None, *eps: float) -> str:
+    """The method asked for, or (None) HOS where it converges and the boundary integral above;
+    refuses amplitudes outside the method's range."""
+    if method is None:
+        method = "hos" if max(eps) <= MAX_EPS else "bie"
+    if method not in ("hos", "bie"):
+        raise ValueError(f"method must be 'hos' or 'bie', got {method!r}")
+    top = MAX_EPS if method == "hos" else MAX_EPS_BIE
+    for e in eps:
+        if not 0.0 < e <= top:
+            why = ("the expansion about z = 0 diverges where the run-up nears the depth; "
+                   f"method='bie' reaches {MAX_EPS_BIE}") if method == "hos" else (
+                   "the crest at the wall sharpens towards a jet: at 0.6 the computation "
+                   "blows up at the peak")
+            raise ValueError(f"{method.upper()} needs 0 < A/d <= {top}, got {e:g} ({why})")
+    return method
+
+
+def _kmax(method: str, kmax: float | None) -> float:
+    """The filter's default: 8/d for HOS (its round-off grows as |k|^M above), none but the
+    2/3 rule for the boundary integral (a sharp run-up needs the modes above 8/d)."""
+    if kmax is not None:
+        return kmax
+    return 8.0 if method == "hos" else math.inf
+
+
+def _solver(method: str, L: float, N: int, order: int, kmax: float, even: bool = False):
+    if method == "hos":
+        return _HOS(L, N, order, kmax)
+    if method == "bie":
+        return _BIE(L, N, kmax, even=even)
+    raise ValueError(f"method must be 'hos' or 'bie', got {method!r}")
+
+
+def _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall: bool, method: str = "hos"):
     """Wave eps1 from -X0 meets wave eps2 from +X0: (peak, its time, X0, volume drift). The
     peak is eta(0, t)'s (``at_wall``; equal waves) or the highest eta over x, each sample
     refined by a parabola, then in t. Unequal waves' potentials step by different amounts,
@@ -189,7 +290,7 @@ def _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall: bool):
     s1, s2 = euler_solution(eps1), euler_solution(eps2)
     X0 = decay / min(s1.kd, s2.kd)
     L = 4.0 * X0
-    hos = _HOS(L, N, order, kmax)
+    hos = _solver(method, L, N, order, kmax, even=at_wall and eps1 == eps2)
     e1, p1 = _wave(s1, hos.x + X0)
     e2, p2 = _wave(s2, X0 - hos.x)
     eta, psi = e1 + e2, p1 + p2 - (_psi_step(s1) - _psi_step(s2)) / L * hos.x
@@ -208,14 +309,17 @@ def _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall: bool):
         eta, psi = hos.step(eta, psi, dt)
         history.append(sample(eta))
         if not math.isfinite(history[-1]):
-            raise RuntimeError(f"HOS collision of A/d = {eps1:g} and {eps2:g} (order {order}, "
-                               f"kmax {kmax:g}) diverged: lower kmax or order")
+            raise RuntimeError(
+                f"HOS collision of A/d = {eps1:g} and {eps2:g} (order {order}, kmax {kmax:g}) "
+                "diverged: lower kmax or order" if method == "hos" else
+                f"BIE collision of A/d = {eps1:g} and {eps2:g} (N = {N}) diverged: the crest "
+                "sharpened beyond the grid (towards a jet or breaking)")
         top = max(history)
         if len(history) > 3 and history[-1] < history[-2] < history[-3] < top and \
                 top > (2.0 if at_wall else 1.05) * max(eps1, eps2):   # past the peak
             break
     else:
-        raise RuntimeError(f"HOS collision of A/d = {eps1:g} and {eps2:g}: no peak by "
+        raise RuntimeError(f"{method.upper()} collision of A/d = {eps1:g} and {eps2:g}: no peak by "
                            f"t = {t_end:g}")
     h = np.asarray(history)
     i = int(np.argmax(h[1:-1])) + 1
@@ -225,17 +329,21 @@ def _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall: bool):
 
 @functools.lru_cache(maxsize=16)
 def wall_reflection(eps: float, order: int = 10, N: int = 1024, dt: float = 0.05,
-                    decay: float = 16.0, kmax: float = 8.0) -> Reflection:
-    """The maximum run-up of a solitary wave of height ``eps`` = A/d at a vertical wall, by
-    the HOS method of West et al. (1987) from the exact wave (see the module docstring):
-    the wave meets its mirror image, and eta(0, t) is the wall's.
-    ``decay``: the crest starts decay/kd from the wall (the wave's tail e^(-decay) there)."""
-    if not 0.0 < eps <= MAX_EPS:
-        raise ValueError(f"wall_reflection needs 0 < A/d <= {MAX_EPS}, got {eps:g} (above it "
-                         "the expansion about z = 0 diverges where the run-up nears the depth)")
-    R, t, X0, drift = _collide(eps, eps, order, N, dt, decay, kmax, at_wall=True)
-    return Reflection(eps=eps, run_up=R, time=t, X0=X0, order=order, N=N, dt=dt,
-                      volume_drift=drift)
+                    decay: float = 16.0, kmax: float | None = None,
+                    method: str | None = None) -> Reflection:
+    """The maximum run-up of a solitary wave of height ``eps`` = A/d at a vertical wall, from
+    the exact wave (see the module docstring): the wave meets its mirror image, and eta(0, t)
+    is the wall's. ``method``: "hos" (West et al. 1987, order ``order``; A/d <= MAX_EPS),
+    "bie" (W by the boundary integral; A/d <= MAX_EPS_BIE), or None: HOS up to MAX_EPS and
+    the boundary integral above. ``decay``: the crest starts decay/kd from the wall (the
+    wave's tail e^(-decay) there). ``kmax``: the filter, 8/d for HOS and none beyond the
+    2/3 rule for the boundary integral by default."""
+    method = _method(method, eps)
+    kmax = _kmax(method, kmax)
+    R, t, X0, drift = _collide(eps, eps, order, N, dt, decay, kmax, at_wall=True,
+                               method=method)
+    return Reflection(eps=eps, run_up=R, time=t, X0=X0, order=order if method == "hos" else 0,
+                      N=N, dt=dt, volume_drift=drift, method=method, kmax=kmax)
 
 
 def su_mirie(eps: float) -> float:
@@ -258,19 +366,25 @@ class Collision:
     peak: float              # max over x and t of eta / d
     time: float              # when (units sqrt(d/g)), from the crests at -X0 and +X0
     X0: float
-    order: int
+    order: int               # the HOS order (0 for the boundary integral)
     N: int
     dt: float
+    method: str = "hos"
 
 
 @functools.lru_cache(maxsize=16)
-def head_on_collision(eps1: float, eps2: float, order: int = 10, N: int = 2048,
-                      dt: float = 0.05, decay: float = 16.0, kmax: float = 8.0) -> Collision:
+def head_on_collision(eps1: float, eps2: float, order: int = 10, N: int | None = None,
+                      dt: float = 0.05, decay: float = 16.0, kmax: float | None = None,
+                      method: str | None = None) -> Collision:
     """The highest elevation reached when a wave of height ``eps1`` (moving right from -X0)
-    meets one of ``eps2`` (moving left from +X0), by the HOS method as
-    :func:`wall_reflection` (equal waves: the wall's run-up)."""
-    for e in (eps1, eps2):
-        if not 0.0 < e <= MAX_EPS:
-            raise ValueError(f"head_on_collision needs 0 < A/d <= {MAX_EPS}, got {e:g}")
-    peak, t, X0, _ = _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall=False)
-    return Collision(eps1=eps1, eps2=eps2, peak=peak, time=t, X0=X0, order=order, N=N, dt=dt)
+    meets one of ``eps2`` (moving left from +X0), by the method of :func:`wall_reflection`
+    (equal waves: the wall's run-up). ``N``: 2048 for HOS and 1024 for the boundary
+    integral by default (its dense solve, on the full domain here, costs N^3)."""
+    method = _method(method, eps1, eps2)
+    kmax = _kmax(method, kmax)
+    if N is None:
+        N = 2048 if method == "hos" else 1024
+    peak, t, X0, _ = _collide(eps1, eps2, order, N, dt, decay, kmax, at_wall=False,
+                              method=method)
+    return Collision(eps1=eps1, eps2=eps2, peak=peak, time=t, X0=X0,
+                     order=order if method == "hos" else 0, N=N, dt=dt, method=method)
