@@ -301,17 +301,18 @@ def plot_lines(case: Case, name: str, fo, wave, theory: str, n_times: int = 6) -
 def run_up_reference(mode: str, A: float, d: float, angle: float | None = None):
     """[(label, R)] of the maximum run-up of a solitary wave of height A in depth d: on a
     vertical wall, linear theory 2A, Su & Mirie's (1980) third order
-    R/d = 2a + a^2/2 + 3a^3/4 and, for a = A/d <= 0.45, the fully nonlinear potential flow
-    (:func:`sphfoam.reference.wall_reflection.wall_reflection`, a few seconds the first time);
+    R/d = 2a + a^2/2 + 3a^3/4 and, for a = A/d <= 0.5, the fully nonlinear potential flow
+    (:func:`sphfoam.reference.wall_reflection.wall_reflection`: the HOS method up to 0.4, a
+    few seconds the first time; the boundary-integral method above, half a minute);
     on a plane beach, Synolakis (1987) R/d = 2.831 sqrt(cot beta) (A/d)^(5/4) (non-breaking)."""
     if mode == "wall":
         from sphfoam.reference import wall_reflection as wr
 
         refs = [("linear theory, 2A", 2.0 * A),
                 ("Su & Mirie (1980), third order", d * wr.su_mirie(A / d))]
-        if 0.0 < A / d <= wr.MAX_EPS:
-            refs.append(("potential flow, fully nonlinear (HOS)",
-                         d * wr.wall_reflection(round(A / d, 12)).run_up))
+        if 0.0 < A / d <= wr.MAX_EPS_BIE:
+            r = wr.wall_reflection(round(A / d, 12))
+            refs.append((f"potential flow, fully nonlinear ({r.method.upper()})", d * r.run_up))
         return refs
     if angle and angle > 0:
         cot = 1.0 / math.tan(math.radians(angle))

@@ -7,8 +7,8 @@ Each amplitude runs in ``runUp/A<A/H>/`` (a copy of this case with only the wave
 vmax and dx changed) until the reflected crest has left the wall; ``runUp/runUp.dat`` and
 ``runUp/runUp.png`` hold eta_max/H against A/H, with the linear-theory line 2 A/H for
 reference, the third-order theory of Su & Mirie (1980), R/H = 2a + a^2/2 + 3a^3/4, and the
-fully nonlinear potential flow (sphfoam.reference.wall_reflection, for A/H <= 0.45; its
-column in runUp.dat is nan beyond).
+fully nonlinear potential flow (sphfoam.reference.wall_reflection: the HOS method up to
+A/H = 0.4, the boundary integral to 0.5; its column in runUp.dat is nan beyond).
 ``--left`` moves the tank's left end (the wave's crest starts at x = 0, the wall is at
 x = 100 m); -60 m saves 40 % of the particles for A/H >= 0.2, but smaller waves are too
 long for it (at A/H = 0.05 the initial wave still rises 0.18 m at x = -60 m).
@@ -69,7 +69,7 @@ def main(argv=None):
         print(f"A/H = {r:g} ...", flush=True)
         rows.append((r, run_one(r, a.dx, a.out, a.left)))
         print(f"  eta_max/H = {rows[-1][1]:.4f}", flush=True)
-    exact = [wr.wall_reflection(r).run_up if 0.0 < r <= wr.MAX_EPS else np.nan
+    exact = [wr.wall_reflection(r).run_up if 0.0 < r <= wr.MAX_EPS_BIE else np.nan
              for r, _ in rows]
     arr = np.column_stack([np.array(rows), exact])
     np.savetxt(a.out / "runUp.dat", arr, header="A/H\teta_max/H\tpotentialFlow",
@@ -85,9 +85,9 @@ def main(argv=None):
     ax.plot(a_, 2 * a_, "k:", label="2 A/H (linear reflection)")
     ax.plot(a_, 2 * a_ + a_**2 / 2 + 3 * a_**3 / 4, "k--",
             label="Su & Mirie (1980), third order")
-    a_pf = np.arange(0.05, wr.MAX_EPS + 1e-9, 0.05)
+    a_pf = np.arange(0.05, wr.MAX_EPS_BIE + 1e-9, 0.05)
     ax.plot(a_pf, [wr.wall_reflection(round(r, 12)).run_up for r in a_pf], "k-", lw=0.8,
-            label="potential flow, fully nonlinear (HOS)")
+            label="potential flow, fully nonlinear (HOS; boundary integral above 0.4)")
     ax.set(xlabel="A/H", ylabel=r"$\eta_{max}/H$", title="maximum run-up on a vertical wall")
     ax.grid(alpha=0.3)
     ax.legend()
