@@ -65,11 +65,18 @@ def test_the_3d_tutorial_case_validates_and_sets_up_in_three_dimensions(tmp_path
     assert np.allclose(st.m[fluid], st.rho[fluid] * 0.02 ** 3)
 
 
-def test_a_3d_tank_run_stays_hydrostatic_and_writes_3d_time_directories(tmp_path):
-    """hydrostaticTank3D at H/dx = 10 for 0.05 s through sphfoam.run: the bed pressure (the
-    line through the column's pressure, as bedPressure.py) within 2 % of rho g H, the
-    water at rest, the time directories 3-D vectors read back bit for bit."""
+@pytest.mark.parametrize("boundary", ["stationaryGhosts", "adami"])
+def test_a_3d_tank_run_stays_hydrostatic_and_writes_3d_time_directories(tmp_path, boundary):
+    """hydrostaticTank3D at H/dx = 10 for 0.05 s through sphfoam.run, with DualSPHysics'
+    stationary ghosts and with Adami's generalised wall (no slip, AHA12 eqs. (22), (27) over
+    the 3-D neighbours): the bed pressure (the line through the column's pressure, as
+    bedPressure.py) within 2 % of rho g H, the water at rest, the time directories 3-D
+    vectors read back bit for bit; Adami's wall particles keep their prescribed (zero)
+    velocity in the written fields."""
     case = _copy(tmp_path)
+    if boundary != "stationaryGhosts":
+        _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
+              f"type {boundary};")
     _edit(case / "system" / "particleDict", r"dx\s+0.02;", "dx 0.04;")
     _edit(case / "system" / "controlDict", r"endTime\s+1;", "endTime 0.05;")
     _edit(case / "system" / "controlDict", r"writeInterval\s+0.25;", "writeInterval 0.05;")
@@ -83,6 +90,7 @@ def test_a_3d_tank_run_stays_hydrostatic_and_writes_3d_time_directories(tmp_path
     _, bed = np.polyfit(z[mid], p[mid], 1)
     assert bed == pytest.approx(1000 * 9.81 * 0.4, rel=0.02)
     assert np.abs(f["U"][fluid]).max() < 0.01 * np.sqrt(9.81 * 0.4)
+    assert np.all(f["U"][~fluid] == 0.0)
     st = sphfoam.Case(case)
     assert st.dimension == 3
 
@@ -108,6 +116,12 @@ def test_a_3d_case_refuses_what_has_no_3d_form_by_name(tmp_path):
     _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
           "type mirrorGhosts;")
     with pytest.raises(CaseError, match=r"boundary.type: boundary 'mirrorGhosts' has no 3-D"):
+        Case(case).validate()
+    case = _copy(tmp_path, "e")                 # Adami's free slip reads 2-D wall normals
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
+          "type adami; noSlip no;")
+    with pytest.raises(CaseError, match=r"boundary 'adami' has no 3-D form \(term 'wallState' "
+                                        r"has code for 2-D\)"):
         Case(case).validate()
 
 

@@ -102,6 +102,19 @@ def test_components_are_expanded_through_the_contract():
     assert three.splitlines()[-1] == "acc_z += lam * w_ab"
 
 
+def test_a_component_that_takes_another_local_s_name_is_refused():
+    """In 3-D ``sU@`` is ``su``, ``sv``, ``sw``: beside a weight sum ``sw`` its w component
+    would overwrite it (Adami's wall once summed its weights and w velocities into one
+    variable, the bed's pressure fell to zero within three steps); a vector assigned row by
+    row and as ``n@`` is one vector, not a clash."""
+    code = "sw = 0.0\nsU@ = 0.0\nsw += Wab\n"
+    assert T.expand_components(code).splitlines()[:3] == ["sw = 0.0", "su = 0.0", "sv = 0.0"]
+    with pytest.raises(T.ContractError, match=r"'sU@' written out over x, y, z gives sw"):
+        T.expand_components(code, T.AXES)
+    rows = "if d:\n    nx = 1.0\n    ny = 0.0\n    nz = 0.0\nelse:\n    n@ = g@\n"
+    assert "nz = gz" in T.expand_components(rows, T.AXES)
+
+
 # --- declarations agree with the code ---------------------------------------------------------
 def _pipeline_models():
     for fam, models in registry.families().items():

@@ -296,10 +296,32 @@ def _reductions(line: str, dims) -> str:
         line = f"{line[:m.start()]}({out}){line[end + 1:]}"
 
 
+_ASSIGNED = re.compile(r"^\s*([A-Za-z_][\w@]*)\s*(?:[-+*/]?=)(?!=)", re.M)
+
+
+def _check_names(code: str, dims) -> None:
+    """A name assigned with ``@`` must not become, written out over the components, one
+    other name the code also assigns without it (``sU@`` in 3-D is ``su``, ``sv``, ``sw``:
+    a weight sum ``sw`` beside it would be overwritten by its w component). Assigning
+    every component by name (a vector written row by row, ``nx = ...``, ``ny = ...``, then
+    ``n@`` in another branch) is the same vector, not a clash."""
+    targets = set(_ASSIGNED.findall(code))
+    plain = {t for t in targets if "@" not in t}
+    for t in targets - plain:
+        components = {_component(t, ax, v) for ax, v in dims}
+        clash = plain & components
+        if clash and clash != components:
+            raise ContractError(f"{t!r} written out over {', '.join(ax for ax, _ in dims)} "
+                                f"gives {', '.join(sorted(clash))}, a name the code also "
+                                "assigns: rename one of them")
+
+
 def expand_components(code: str, dims=(("x", "u"), ("y", "v"))) -> str:
     """Write every line holding ``@`` once per component, after writing out its reductions
     ``dot(A@, B@)`` (A_x * B_x + A_y * B_y ...) and ``sum@(E@)`` (E_x + E_y ...); a line
-    whose only ``@`` are in reductions is written once (see the module docstring)."""
+    whose only ``@`` are in reductions is written once (see the module docstring). A
+    component name that clashes with one the code assigns is refused (:func:`_check_names`)."""
+    _check_names(code, dims)
     out = []
     for line in textwrap.dedent(code).strip("\n").splitlines():
         if "@" not in line:

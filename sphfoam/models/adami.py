@@ -20,8 +20,12 @@ one in the continuity equation; here every term sees one velocity, whose normal 
 is the mirror image of the fluid's as for ``mirrorGhosts``, T(3.78).) The prescribed wall
 velocity (the wall particle's velocity as set up, e.g. a sliding wall's constant
 ``velocity``, or its wall entry's motion) is put back on the wall particles before each
-evaluation and after each step (a run-time hook), so written fields show it. The wall acceleration a_w of eq. (27) is taken
-as zero: exact for fixed walls, an approximation for moving ones.
+evaluation and after each step (a run-time hook), so written fields show it. The wall
+acceleration a_w of eq. (27) is taken as zero: exact for fixed walls, an approximation for
+moving ones.
+
+In 3-D the no-slip form runs as written (the sums over the 3-D neighbours, u, v and w); the
+free-slip form reads the 2-D wall normal and is refused there by name.
 """
 
 from __future__ import annotations
@@ -37,22 +41,22 @@ from sphfoam.models.boundaries import Boundary
 from sphfoam.registry import Coeffs, register
 
 _INIT = """\
-bnd_sw = 0.0
+bnd_wsum = 0.0
 bnd_sp = 0.0
 bnd_sU@ = 0.0
 """
 
 #: over fluid neighbours f of wall particle a: AHA12 eq. (27) with a_w = 0 and the Shepard sums
 _PAIR = """\
-bnd_sw += Wab
+bnd_wsum += Wab
 bnd_sp += (pb + rhob * dot(g@, d@_ab)) * Wab
 bnd_sU@ += (U@a - U@_ab) * Wab
 """
 
 _FINAL = """\
-if bnd_sw > 0.0:
-    bnd_pw = bnd_sp / bnd_sw
-    bnd_U@f = bnd_sU@ / bnd_sw
+if bnd_wsum > 0.0:
+    bnd_pw = bnd_sp / bnd_wsum
+    bnd_U@f = bnd_sU@ / bnd_wsum
 else:
     bnd_pw = 0.0
     bnd_U@f = U@a
@@ -82,7 +86,14 @@ class Adami(Boundary):
     name = "adami"
     doc = ("wall-particle rows with p extrapolated from the fluid, Adami, Hu & Adams (2012) "
            "eq. (27), rho by the inverse EOS, no-slip u_w = 2 U_w - u~_f (eq. 22) or free slip")
-    wall_fields = ("nx", "ny", "corner")
+    #: the hooks handle w in 3-D; the free-slip form needs the 2-D wall normals (its term is
+    #: 2-D only, so it is refused in 3-D by name)
+    hook_dims = (2, 3)
+
+    @property
+    def wall_fields(self) -> tuple[str, ...]:
+        """The wall normal and corner flag, which only the free-slip form reads."""
+        return () if self.coeffs.noSlip else ("nx", "ny", "corner")
 
     class Coeffs(Coeffs):
         noSlip: bool = Field(True, description="no slip: u_w = 2 U_w - u~_f, AHA12 eq. (22); "
@@ -116,10 +127,11 @@ class Adami(Boundary):
         st = run.state
         wall = st.kind == WALL
         n_id = int(st.id[wall].max()) + 1 if wall.any() else 0
-        self._u0 = np.zeros(n_id)
-        self._v0 = np.zeros(n_id)
-        self._u0[st.id[wall]] = st.u[wall]
-        self._v0[st.id[wall]] = st.v[wall]
+        self._U0 = []
+        for u in st.velocities:
+            u0 = np.zeros(n_id)
+            u0[st.id[wall]] = u[wall]
+            self._U0.append(u0)
         self._velocities = {}
 
     def walls_moved(self, run, offsets, velocities):
@@ -131,14 +143,14 @@ class Adami(Boundary):
         st = run.state
         wall = st.kind == WALL
         ids = st.id[wall]
-        st.u[wall] = self._u0[ids]
-        st.v[wall] = self._v0[ids]
+        for u, u0 in zip(st.velocities, self._U0):
+            u[wall] = u0[ids]
         if self._velocities and "patch" in st.extra:
             patch = st.extra["patch"]
-            for which, (uu, vv) in self._velocities.items():
+            for which, vel in self._velocities.items():
                 on = wall & (patch == float(which))
-                st.u[on] = uu
-                st.v[on] = vv
+                for u, uu in zip(st.velocities, vel):
+                    u[on] = uu
 
     def before_evaluation(self, run):
         self._prescribed_velocity(run)
