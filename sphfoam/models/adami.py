@@ -97,7 +97,8 @@ class Adami(Boundary):
 
     class Coeffs(Coeffs):
         noSlip: bool = Field(True, description="no slip: u_w = 2 U_w - u~_f, AHA12 eq. (22); "
-                             "no: free slip (the fluid's tangential velocity)")
+                             "no: free slip (the fluid's tangential velocity; 2-D only, it reads "
+                             "the 2-D wall normal)")
 
     def params(self, ctx: CaseContext):
         return {}
