@@ -138,6 +138,43 @@ def test_3d_gauges_and_probes_at_rest(tmp_path):
     assert np.all(row[2:] == 0.0)
 
 
+def test_3d_wall_run_up_reads_an_extruded_2d_wall_as_the_2d_run_up(tmp_path):
+    """runUp mode wall in 3-D: water against the wall x = 0.4 of the 3-D tank, lifted on a
+    ramp uniform across y (a lattice column per (x, y), tops rising towards the wall), reads
+    what the 2-D runUp reads on one of its slices: the particle run-up exactly, the fraction
+    run-up (the fluid mirrored across the wall, the crossing on the wall's vertical at y)
+    within 0.02 dx of the 2-D one; particle mode without y reads the whole wall; a beach,
+    or a fraction without y, is refused in 3-D."""
+    from sphfoam.sampling.waves import fraction_wall_run_up
+
+    c, _ = _setup(_case(tmp_path, "hydrostaticTank3D", "r", TANK3D))
+    dx = 0.04
+    xs = dx * (np.arange(10) + 0.5)
+    ys = dx * (np.arange(10) + 0.5)
+    top = 0.2 + 0.25 * xs                          # the water rises towards x = 0.4
+    x2 = np.concatenate([[x] * int(t / dx) for x, t in zip(xs, top)])
+    z2 = np.concatenate([dx * (np.arange(int(t / dx)) + 0.5) for t in top])
+    X, Y, Z = np.tile(x2, ys.size), np.repeat(ys, x2.size), np.tile(z2, ys.size)
+    st = type("S", (), {})()
+    st.x, st.y, st.z = X, Y, Z
+    st.rho, st.m = np.full(X.size, RHO), np.full(X.size, RHO * dx ** 3)
+    f = np.ones(X.size, dtype=bool)
+    kernel, h = c.models.sph["kernel"], c.context.h
+    want = z2[x2 > 0.36].max() + 0.5 * dx
+    part = _fo(c, {"type": "runUp", "mode": "wall", "x": 0.4, "y": 0.2})
+    assert part.measure_3d(st, f) == pytest.approx(want, abs=1e-12)
+    whole = _fo(c, {"type": "runUp", "mode": "wall", "x": 0.4}, "w")
+    assert whole.measure_3d(st, f) == pytest.approx(want, abs=1e-12)
+    frac = _fo(c, {"type": "runUp", "mode": "wall", "x": 0.4, "y": 0.2, "surface": "fraction"},
+               "f")
+    r2 = fraction_wall_run_up(x2, z2, np.full(x2.size, dx * dx), 0.4, kernel, h, dx)
+    assert np.isfinite(r2) and frac.measure_3d(st, f) == pytest.approx(r2, abs=0.02 * dx)
+    for spec, msg in (({"mode": "beach", "start": [0, 0], "angle": 5}, "mode beach has no 3-D"),
+                      ({"mode": "wall", "x": 0.4, "surface": "fraction"}, "give its y")):
+        with pytest.raises(Exception, match=msg):
+            registry.build("functionObject", {"type": "runUp", **spec}, {"dim": 3})
+
+
 def test_gauges_refuse_the_wrong_dimensions_positions(tmp_path):
     case = _case(tmp_path, "hydrostaticTank3D", "a", TANK3D,
                  "g { type waveGauges; x (0.2); }")

@@ -392,6 +392,35 @@ def fraction_wall_run_up(x, y, vol, wall_x, kernel, h, dx, *, still=0.0) -> floa
     return float(fraction_surface(xm, ym, vm, [wall_x], kernel, h, dx)[0]) - still
 
 
+def fraction_wall_run_up_3d(x, y, z, vol, wall_x, wall_y, kernel, h, dx, *,
+                            still=0.0) -> float:
+    """Run-up on the vertical wall plane x = wall_x of a 3-D case at its point y = wall_y:
+    the highest z there where the fluid fraction, with the fluid mirrored across the plane,
+    reaches 1/2 (:func:`fraction_surface_3d` on the wall), minus ``still``."""
+    x, y, z, vol = (np.asarray(a, dtype=float) for a in (x, y, z, vol))
+    reach = float(kernel.support) * h
+    near = np.abs(x - wall_x) < reach
+    if not near.any():
+        return float("nan")
+    xm = np.concatenate([x, 2.0 * wall_x - x[near]])
+    ym, zm = np.concatenate([y, y[near]]), np.concatenate([z, z[near]])
+    vm = np.concatenate([vol, vol[near]])
+    return float(fraction_surface_3d(xm, ym, zm, vm, [(wall_x, wall_y)], kernel, h, dx)[0]) \
+        - still
+
+
+def wall_run_up_3d(xf, yf, zf, wall_x, dx, *, wall_y=None, still=0.0, band=1.5) -> float:
+    """Highest fluid particle within ``band`` dx of the vertical wall plane x = ``wall_x``
+    (and of its point y = ``wall_y``, if given), + dx/2, above ``still`` (NaN with no fluid
+    there): :func:`wall_run_up` in 3-D, z up."""
+    near = np.abs(np.asarray(xf) - wall_x) <= band * dx
+    if wall_y is not None:
+        near &= np.abs(np.asarray(yf) - wall_y) <= band * dx
+    if not near.any():
+        return float("nan")
+    return float(np.asarray(zf)[near].max()) + 0.5 * dx - still
+
+
 def _fluid_volumes(st, f):
     return st.m[f] / st.rho[f]
 
@@ -947,18 +976,26 @@ class RunUp(FunctionObject):
     ``still`` is its level) and subtract ``still``. NaN while no fluid touches the wall/beach.
     ``surface fraction`` (walls): the highest point of the wall where the SPH fluid fraction,
     with the fluid mirrored across the wall, reaches 1/2 (sub-particle).
+
+    3-D (mode wall, z up): the wall is the plane x = ``x``; ``surface particle`` reads the
+    highest fluid particle within ``band`` dx of it (and of y = ``y``, if given), ``surface
+    fraction`` the fraction's crossing on the wall's vertical at y = ``y``.
     """
 
     name = "runUp"
     doc = "run-up on a vertical wall or a plane beach (highest fluid particle in contact + " \
           "dx/2) and its running maximum"
     columns = ("time", "runUp", "maxRunUp")
+    dims = (2, 3)
 
     class Coeffs(FunctionObjectCoeffs):
         mode: Literal["wall", "beach"] = Field(description=(
             "`wall`: a vertical wall at `x`; `beach`: a plane slope given by `start` and "
             "`angle`"))
         x: float | None = Field(None, description="x of the wall (m), mode wall")
+        y: float | None = Field(None, description=(
+            "3-D, mode wall: the wall's point y (m) to read (`surface fraction` needs it; "
+            "`surface particle` without it reads the whole wall)"))
         start: Vector2 | None = Field(None, description=(
             "foot of the beach line `(x y)` (m), mode beach"))
         angle: float | None = Field(None, gt=-90.0, lt=90.0, description=(
@@ -984,7 +1021,16 @@ class RunUp(FunctionObject):
             "mirrored across the wall, reaches 1/2, sub-particle (issue 13)"))
 
         @model_validator(mode="after")
-        def _check(self):
+        def _check(self, info: ValidationInfo):
+            dim = case_dimension(info)
+            if dim == 3 and self.mode == "beach":
+                raise ValueError("mode beach has no 3-D form (a beach line is 2-D): use mode "
+                                 "wall")
+            if dim == 3 and self.surface == "fraction" and self.y is None:
+                raise ValueError("surface fraction in 3-D reads the wall on one vertical: "
+                                 "give its y")
+            if dim == 2 and self.y is not None:
+                raise ValueError("y is the wall's point in a 3-D case: a 2-D wall is x")
             if self.mode == "wall" and self.x is None:
                 raise ValueError("mode wall needs the wall position x")
             if self.mode == "beach" and (self.start is None or self.angle is None):
@@ -1009,6 +1055,15 @@ class RunUp(FunctionObject):
         if self.coeffs.shoreline != "connected":
             return math.inf
         return self.case.models.sph["kernel"].support * self.ctx.h
+
+    def measure_3d(self, st, f) -> float:
+        c, dx = self.coeffs, self.ctx.dx
+        if c.surface == "fraction":
+            return fraction_wall_run_up_3d(st.x[f], st.y[f], st.z[f], _fluid_volumes(st, f),
+                                           c.x, c.y, self.case.models.sph["kernel"],
+                                           self.ctx.h, dx, still=c.still)
+        return wall_run_up_3d(st.x[f], st.y[f], st.z[f], c.x, dx, wall_y=c.y, still=c.still,
+                              band=c.band)
 
     def measure(self, xf, yf, vf=None) -> float:
         c, dx = self.coeffs, self.ctx.dx
@@ -1037,7 +1092,10 @@ class RunUp(FunctionObject):
             self.max = float(np.fmax(self.max, r))
             self.write_row((sim.time, r, self.max, xs, self.x_max))
             return
-        r = self.measure(st.x[f], st.y[f], _fluid_volumes(st, f))
+        if _dim(self.ctx) == 3:
+            r = self.measure_3d(st, f)
+        else:
+            r = self.measure(st.x[f], st.y[f], _fluid_volumes(st, f))
         self.max = float(np.fmax(self.max, r))
         self.write_row((sim.time, r, self.max))
 
