@@ -175,6 +175,41 @@ def test_3d_wall_run_up_reads_an_extruded_2d_wall_as_the_2d_run_up(tmp_path):
             registry.build("functionObject", {"type": "runUp", **spec}, {"dim": 3})
 
 
+def test_3d_crest_tracker_reads_an_extruded_crest_as_the_2d_tracker(tmp_path):
+    """crestTracker in 3-D: a solitary-like hump in columns, uniform across y; the tracker's
+    gauges along x on the line y read the crest (x_c, eta_c) of the 2-D tracker on the 2-D
+    slice, by the particle gauges to 1e-12 m and the fraction gauges to 0.02 dx; without y,
+    or with surface volume, it is refused in 3-D."""
+    c, _ = _setup(_case(tmp_path, "hydrostaticTank3D", "c", TANK3D))
+    dx = 0.04
+    xs = dx * (np.arange(10) + 0.5)
+    top = 0.2 + 0.08 / np.cosh((xs - 0.23) / 0.08) ** 2
+    n = np.rint(top / dx).astype(int)              # columns as the set-up fills them:
+    x2 = np.repeat(xs, n)                          # n particles spaced top/n, so the tops
+    z2 = np.concatenate([(np.arange(k) + 0.5) * t / k for k, t in zip(n, top)])   # vary
+    ys = dx * (np.arange(10) + 0.5)
+    st = type("S", (), {})()
+    st.x, st.y, st.z = np.tile(x2, ys.size), np.repeat(ys, x2.size), np.tile(z2, ys.size)
+    st.rho, st.m = np.full(st.x.size, RHO), np.full(st.x.size, RHO * dx ** 3)
+    f = np.ones(st.x.size, dtype=bool)
+    ctx2 = type("C", (), {"dx": dx, "h": c.context.h, "dim": 2})()
+    for surface, tol in (("particle", 1e-12), ("fraction", 0.02 * dx)):
+        spec = {"type": "crestTracker", "y": 0.2, "xMin": 0.02, "xMax": 0.38,
+                "surface": surface}
+        three = _fo(c, spec, f"c{surface}")
+        two = registry.build("functionObject", {k: v for k, v in spec.items() if k != "y"},
+                             {"dim": 2})
+        two.case, two.ctx = c, ctx2
+        xc3, ec3 = three.measure_3d(st, f)
+        xc2, ec2 = two.measure(x2, z2, np.full(x2.size, dx * dx))
+        assert np.isfinite(xc3) and ec3 > 0.2
+        assert xc3 == pytest.approx(xc2, abs=tol) and ec3 == pytest.approx(ec2, abs=tol)
+    for spec, msg in (({}, "give its y"), ({"y": 0.2, "surface": "volume"},
+                                           "surface volume has no 3-D form")):
+        with pytest.raises(Exception, match=msg):
+            registry.build("functionObject", {"type": "crestTracker", **spec}, {"dim": 3})
+
+
 def test_gauges_refuse_the_wrong_dimensions_positions(tmp_path):
     case = _case(tmp_path, "hydrostaticTank3D", "a", TANK3D,
                  "g { type waveGauges; x (0.2); }")

@@ -1165,16 +1165,23 @@ class CrestTracker(FunctionObject):
     with every sample in between). ``surface fraction`` reads the gauges by the SPH fluid
     fraction 1/2 (sub-particle) instead of the highest particle, ``surface volume`` by the
     column's water volume (``ColumnSurface``).
+
+    3-D (z up): the gauges lie on the line y = ``y`` from ``xMin`` to ``xMax`` (the 3-D
+    gauges, :func:`surface_elevation_3d` or :func:`fraction_surface_3d`); ``surface volume``
+    has no 3-D form.
     """
 
     name = "crestTracker"
     doc = "crest position, height and celerity of a travelling wave (gauges every dx, " \
           "least-squares fits), T §4.3.2"
     columns = ("time", "xCrest", "etaCrest", "c")
+    dims = (2, 3)
 
     class Coeffs(_GaugeSurfaceCoeffs):
         xMin: float | None = Field(None, description=(
             "first gauge (m); default the leftmost fluid particle"))
+        y: float | None = Field(None, description=(
+            "3-D: the gauges' line y (m), along x (required in 3-D)"))
         xMax: float | None = Field(None, description=(
             "last gauge (m); default the rightmost fluid particle"))
         spacing: float | None = Field(None, gt=0, description="gauge spacing (m); default dx")
@@ -1192,6 +1199,18 @@ class CrestTracker(FunctionObject):
             "celerity fit: only samples with eta_c >= minHeight (m), e.g. once the wave has "
             "formed"))
 
+        @model_validator(mode="after")
+        def _line(self, info: ValidationInfo):
+            dim = case_dimension(info)
+            if dim == 3 and self.y is None:
+                raise ValueError("a 3-D case's crest tracker reads gauges along x on one line: "
+                                 "give its y")
+            if dim == 3 and self.surface == "volume":
+                raise ValueError("surface volume has no 3-D form: use particle or fraction")
+            if dim == 2 and self.y is not None:
+                raise ValueError("y is the gauges' line in a 3-D case: a 2-D case has none")
+            return self
+
     def start(self, case, ctx, start_time_name):
         super().start(case, ctx, start_time_name)
         self.column = (ColumnSurface(self, self.coeffs.volumeWidth)
@@ -1205,10 +1224,7 @@ class CrestTracker(FunctionObject):
         c, dx = self.coeffs, self.ctx.dx
         if xf.size == 0:
             return float("nan"), float("nan")
-        lo = c.xMin if c.xMin is not None else float(xf.min())
-        hi = c.xMax if c.xMax is not None else float(xf.max())
-        step = c.spacing or dx
-        gx = lo + step * np.arange(int(math.floor((hi - lo) / step + 1e-9)) + 1)
+        gx = self._gauges(xf)
         if c.surface == "volume":
             eta = self.column.surface(xf, yf, vf, gx, still=c.still)
         elif c.surface == "fraction":
@@ -1218,9 +1234,36 @@ class CrestTracker(FunctionObject):
             eta = surface_elevation(xf, yf, gx, dx, still=c.still, window=c.window)
         return crest(gx, eta, c.fitAbove)
 
+    def _gauges(self, xf) -> np.ndarray:
+        """The gauges' x: every ``spacing`` from xMin to xMax (the fluid's extent)."""
+        c = self.coeffs
+        lo = c.xMin if c.xMin is not None else float(xf.min())
+        hi = c.xMax if c.xMax is not None else float(xf.max())
+        step = c.spacing or self.ctx.dx
+        return lo + step * np.arange(int(math.floor((hi - lo) / step + 1e-9)) + 1)
+
+    def measure_3d(self, st, f) -> tuple[float, float]:
+        """(x_c, eta_c) of a 3-D case: the gauges along x on the line y = ``y``."""
+        c, dx = self.coeffs, self.ctx.dx
+        if not f.any():
+            return float("nan"), float("nan")
+        gx = self._gauges(st.x[f])
+        pts = np.column_stack([gx, np.full(gx.size, c.y)])
+        if c.surface == "fraction":
+            eta = fraction_surface_3d(st.x[f], st.y[f], st.z[f], _fluid_volumes(st, f), pts,
+                                      self.case.models.sph["kernel"], self.ctx.h, dx,
+                                      still=c.still)
+        else:
+            eta = surface_elevation_3d(st.x[f], st.y[f], st.z[f], pts, dx, still=c.still,
+                                       window=c.window)
+        return crest(gx, eta, c.fitAbove)
+
     def execute(self, sim):
         st, f = _fluid(sim)
-        xc, ec = self.measure(st.x[f], st.y[f], _fluid_volumes(st, f))
+        if _dim(self.ctx) == 3:
+            xc, ec = self.measure_3d(st, f)
+        else:
+            xc, ec = self.measure(st.x[f], st.y[f], _fluid_volumes(st, f))
         self.samples.append((float(sim.time), xc, ec))
         if len(self.samples) >= 2:
             self._flush(len(self.samples) - 1)
