@@ -253,8 +253,8 @@ def plot_probes(case: Case, name: str, fo, wave, theory: str) -> Path | None:
 
 
 def plot_lines(case: Case, name: str, fo, wave, theory: str, n_times: int = 6) -> Path | None:
-    """Ux(y) along each line at up to ``n_times`` sampled times; a line that follows the
-    crest is drawn against the theory's u(z) under the crest."""
+    """Ux(y) along each line at up to ``n_times`` sampled times (Ux(z) in 3-D); a line that
+    follows the crest is drawn against the theory's u(z) under the crest."""
     from sphfoam.io.tables import read_table, start_folders
 
     files = []
@@ -272,15 +272,19 @@ def plot_lines(case: Case, name: str, fo, wave, theory: str, n_times: int = 6) -
     plt = _pyplot()
     fig, ax = plt.subplots(1, 2, figsize=(11, 5))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    up = "y"
     for i, k in enumerate(pick):
         t, f = files[k]
         cols, d = read_table(f)
+        up = cols[0][0]                            # y, or z in 3-D (z Ux Uy Uz p per line)
+        width = 5 if up == "z" else 4
         col = colours[i % len(colours)]
-        for j in range(0, len(cols), 4):
-            tag = cols[j][1:] if len(cols) > 4 else ""
+        for j in range(0, len(cols), width):
+            tag = cols[j][1:] if len(cols) > width else ""     # "(x)", or "(x,y)" in 3-D
+            where_tag = ("x" if up == "y" else "") + tag
             ax[0].plot(d[:, j + 1], d[:, j], "o-", ms=3, lw=0.8, color=col,
-                       label=f"t = {t:g} s{(' x' + tag) if tag else ''}")
-            ax[1].plot(d[:, j + 3], d[:, j], "o-", ms=3, lw=0.8, color=col)
+                       label=f"t = {t:g} s" + (f" {where_tag}" if tag else ""))
+            ax[1].plot(d[:, j + width - 1], d[:, j], "o-", ms=3, lw=0.8, color=col)
     crest = fo.coeffs.follow == "crest"
     if wave is not None and crest:
         w, H, d = wave
@@ -288,12 +292,14 @@ def plot_lines(case: Case, name: str, fo, wave, theory: str, n_times: int = 6) -
         y = fo.coeffs.y0 + z
         ax[0].plot(w.u(0.0, z), y, "k--", lw=1.2, label=f"{theory} under the crest")
         ax[1].plot(w.p(0.0, z), y, "k--", lw=1.2)
-    ax[0].set(xlabel="Ux (m/s)", ylabel="y (m)")
-    ax[1].set(xlabel="p (Pa)", ylabel="y (m)")
+    ax[0].set(xlabel="Ux (m/s)", ylabel=f"{up} (m)")
+    ax[1].set(xlabel="p (Pa)", ylabel=f"{up} (m)")
     for a in ax:
         a.grid(alpha=0.3)
     ax[0].legend(fontsize=8)
-    where = "under the crest" if crest else "at x = " + ", ".join(f"{x:g}" for x in fo.coeffs.x)
+    where = "under the crest" if crest else (
+        "at x = " + ", ".join(f"{x:g}" for x in fo.coeffs.x) if fo.coeffs.x else
+        "at (x y) = " + ", ".join(f"({x:g} {y:g})" for x, y in fo.coeffs.points))
     fig.suptitle(f"{case.name}: {name} (lines {where})")
     return _save(fig, files[-1][1].parent.parent / f"{name}.png")
 

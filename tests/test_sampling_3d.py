@@ -208,6 +208,11 @@ def test_3d_crest_tracker_reads_an_extruded_crest_as_the_2d_tracker(tmp_path):
                                            "surface volume has no 3-D form")):
         with pytest.raises(Exception, match=msg):
             registry.build("functionObject", {"type": "crestTracker", **spec}, {"dim": 3})
+    for spec, dim, msg in (({"x": [0.1]}, 3, r"lines stand at points \(\(x y\) ...\), not x"),
+                           ({"points": [[0.1, 0.2]]}, 2, "a 2-D case gives x"),
+                           ({}, 3, "give the line positions points, or follow crest")):
+        with pytest.raises(Exception, match=msg):
+            registry.build("functionObject", {"type": "lines", **spec}, {"dim": dim})
 
 
 def test_gauges_refuse_the_wrong_dimensions_positions(tmp_path):
@@ -292,6 +297,9 @@ def test_forces_3d_block_and_tank_and_the_output_through_a_run(tmp_path):
     blockForce { type forces; patches (block); CofR (0.2 0.2 0); writeControl writeTime; }
     slice { type slices; point (0.2 0.2 0.3); normal (0 1 0); size (0.4 0.6);
             writeControl writeTime; }
+    profile { type lines; points ((0.06 0.06)); nPoints 6; writeControl writeTime; }
+    wallRunUp { type runUp; mode wall; x 0.4; y 0.2; writeControl writeTime; }
+    crest { type crestTracker; y 0.2; xMin 0.02; xMax 0.38; writeControl writeTime; }
 """
     case = _case(tmp_path, "hydrostaticTank3D", "a", TANK3D, fns)
     c, st = _setup(case)
@@ -334,7 +342,20 @@ def test_forces_3d_block_and_tank_and_the_output_through_a_run(tmp_path):
         run_rows = np.loadtxt(text.splitlines(), ndmin=2)
         sampled = np.loadtxt(out / n / "0" / f, ndmin=2)
         assert np.allclose(sampled, run_rows, rtol=1e-6, atol=1e-9), n
+    with (out / "profile/0/0.01/line.dat").open() as fh:
+        head = [next(fh) for _ in range(2)]
+    top = re.search(r"\(x y\) = \(0.06 0.06\), surface z = ([0-9.]+)", head[0])
+    assert top and float(top.group(1)) == pytest.approx(0.4, abs=0.01 * 0.04), head[0]
+    assert head[1].split() == ["#", "z", "Ux", "Uy", "Uz", "p"]
+    prof = np.loadtxt(out / "profile/0/0.01/line.dat", ndmin=2)
+    assert prof.shape == (6, 5) and prof[0, 0] == 0.0
+    assert prof[-1, 0] == pytest.approx(float(top.group(1)))
+    mid = (prof[:, 0] > 0.1) & (prof[:, 0] < 0.3)
+    assert np.allclose(prof[mid, 4], RHO * G * (0.4 - prof[mid, 0]), rtol=0.03)
+    run_up = np.loadtxt(out / "wallRunUp/0/wallRunUp.dat", ndmin=2)
+    assert np.allclose(run_up[:, 1], 0.4, atol=0.01 * 0.04)      # still water at the wall
     said = []
     pngs = plot_case(case, log=said.append)
     names = {p.name for p in pngs}
-    assert {"probes.png", "sensors.png", "blockForce.png", "slice.png"} <= names, said
+    assert {"probes.png", "sensors.png", "blockForce.png", "slice.png", "profile.png",
+            "wallRunUp.png"} <= names, said

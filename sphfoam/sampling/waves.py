@@ -820,15 +820,24 @@ class Lines(FunctionObject):
     sample writes ``<time>/line.dat`` (columns y, Ux, Uy, p; with several lines these four
     repeat per line, the header naming each line's x); ``<name>.dat`` holds time and, per
     line, its x and surface y.
+
+    3-D (z up): the lines stand at horizontal ``points`` ((x y) ...) or under the highest
+    fluid particle; the surface is the 3-D gauge's, ``y0`` is the bed's height z, and
+    ``line.dat`` holds z, Ux, Uy, Uz, p per line (the 3-D interpolant of ``probes``);
+    ``<name>.dat`` holds time and, per line, its x, y and surface z.
     """
 
     name = "lines"
     doc = "u(z) profiles (Ux, Uy, p) from bed to surface at fixed x or under the moving crest, " \
           "T Figs 4.17, 4.21"
+    dims = (2, 3)
 
     class Coeffs(FunctionObjectCoeffs):
         x: list[float] = Field(default_factory=list, description=(
             "x of the vertical lines (m), e.g. `(5 10)`; leave out with `follow crest`"))
+        points: list[Vector2] = Field(default_factory=list, description=(
+            "3-D: the lines' horizontal positions `((x1 y1) ...)` (m); leave out with "
+            "`follow crest`"))
         follow: Literal["none", "crest"] = Field("none", description=(
             "`crest`: one line under the highest fluid particle, moving with the wave "
             "(T Figs 4.17, 4.21); `none`: the fixed lines of `x`"))
@@ -837,7 +846,8 @@ class Lines(FunctionObject):
             "paddle)"))
         xMax: float = Field(math.inf, description=(
             "with `follow crest`, only look for the crest at x <= xMax"))
-        y0: float = Field(0.0, description="y of the bed (m), the lowest point of each line")
+        y0: float = Field(0.0, description=(
+            "height of the bed (m), the lowest point of each line (y in 2-D, z in 3-D)"))
         nPoints: int = Field(20, ge=2, description=(
             "points per line, evenly spaced from y0 to the local surface"))
         still: float = Field(0.0, description=(
@@ -849,19 +859,31 @@ class Lines(FunctionObject):
             return _as_list(v)
 
         @model_validator(mode="after")
-        def _check(self):
-            if self.follow == "crest" and self.x:
-                raise ValueError("give either x (fixed lines) or follow crest, not both")
-            if self.follow == "none" and not self.x:
-                raise ValueError("give the line positions x, or follow crest")
+        def _check(self, info: ValidationInfo):
+            dim = case_dimension(info)
+            where = "points" if dim == 3 else "x"
+            if dim == 3 and self.x:
+                raise ValueError("a 3-D case's lines stand at points ((x y) ...), not x")
+            if dim == 2 and self.points:
+                raise ValueError("points (x y) are the lines of a 3-D case: a 2-D case "
+                                 "gives x")
+            given = self.points if dim == 3 else self.x
+            if self.follow == "crest" and given:
+                raise ValueError(f"give either {where} (fixed lines) or follow crest, not "
+                                 "both")
+            if self.follow == "none" and not given:
+                raise ValueError(f"give the line positions {where}, or follow crest")
             return self
 
     def start(self, case, ctx, start_time_name):
-        n = 1 if self.coeffs.follow == "crest" else len(self.coeffs.x)
+        c = self.coeffs
+        three = _dim(ctx) == 3
+        n = 1 if c.follow == "crest" else len(c.points if three else c.x)
         cols = ["time"]
         for k in range(n):
             tag = "" if n == 1 else f"_{k}"
-            cols += [f"x{tag}", f"surface{tag}"]
+            cols += [f"x{tag}", f"y{tag}", f"surface{tag}"] if three else \
+                [f"x{tag}", f"surface{tag}"]
         self.columns = tuple(cols)
         super().start(case, ctx, start_time_name)
         self.precision = int(getattr(getattr(case, "control", None), "timePrecision", 6) or 6)
@@ -876,9 +898,71 @@ class Lines(FunctionObject):
             return np.array([xf[i]])
         return np.asarray(c.x, dtype=float)
 
-    def execute(self, sim):
+    def _positions_3d(self, st, f) -> np.ndarray:
+        """(n, 2): the lines' (x y), or that of the highest fluid particle in [xMin, xMax]."""
+        c = self.coeffs
+        if c.follow == "crest":
+            sel = f & (st.x >= c.xMin) & (st.x <= c.xMax)
+            if not sel.any():
+                return np.full((1, 2), np.nan)
+            i = int(np.argmax(np.where(sel, st.z, -np.inf)))
+            return np.array([[st.x[i], st.y[i]]])
+        return np.asarray(c.points, dtype=float).reshape(-1, 2)
+
+    def _execute_3d(self, sim):
+        from sphfoam.sampling.interp import fluid_arrays, shepard
+
+        c, dx = self.coeffs, self.ctx.dx
+        _current_pressure(sim)
+        st, f = _fluid(sim)
+        xy = self._positions_3d(st, f)
+        surf = np.full(len(xy), np.nan)
+        ok = np.isfinite(xy[:, 0])
+        if ok.any() and f.any():
+            surf[ok] = surface_elevation_3d(st.x[f], st.y[f], st.z[f], xy[ok], dx)
+        frac = np.linspace(0.0, 1.0, c.nPoints)
+        zs = c.y0 + (surf[:, None] - c.y0) * frac[None, :]          # (nLines, nPoints)
+        pts = np.column_stack([np.repeat(xy[:, 0], c.nPoints), np.repeat(xy[:, 1], c.nPoints),
+                               zs.ravel()])
+        vals = np.full((4, len(pts)), np.nan)
+        good = np.isfinite(pts).all(axis=1)
+        if good.any():
+            ff, pos, vol = fluid_arrays(st, 3)
+            vals[:, good], _ = shepard(pos, vol, np.stack([st.p[ff], st.u[ff], st.v[ff],
+                                                           st.w[ff]]), pts[good],
+                                       self.case.models.sph["kernel"], self.ctx.h, 3)
+        p, ux, uy, uz = (v.reshape(len(xy), c.nPoints) for v in vals)
+        row = [sim.time]
+        for k in range(len(xy)):
+            row += [xy[k, 0], xy[k, 1], surf[k]]
+        self.write_row(row)
+        one = len(xy) == 1
+        labels = ["" if one else f"({_label(x)},{_label(y)})" for x, y in xy]
+        cols = [f"{q}{lab}" for lab in labels for q in ("z", "Ux", "Uy", "Uz", "p")]
+        table = np.column_stack([a for k in range(len(xy))
+                                 for a in (zs[k], ux[k], uy[k], uz[k], p[k])])
+        where = "; ".join(f"(x y) = ({x:.9g} {y:.9g}), surface z = {sz:.9g}, eta = "
+                          f"{sz - c.still:.9g}" for (x, y), sz in zip(xy, surf))
+        self._write_line(sim.time, where, cols, table)
+
+    def _write_line(self, time, where, cols, table) -> None:
+        """``<time>/line.dat``: the header (where the lines stood) and the profiles."""
         from sphfoam.case.times import time_name
 
+        folder = self.folder / time_name(float(time), self.precision)
+        folder.mkdir(parents=True, exist_ok=True)
+        with (folder / "line.dat").open("w") as fh:
+            fh.write(f"# {self.object_name} ({self.name}) at time {time:.9g}"
+                     f"{' under the crest' if self.coeffs.follow == 'crest' else ''}: "
+                     f"{where}\n")
+            fh.write("# " + "\t".join(cols) + "\n")
+            for r in table:
+                fh.write("\t".join(f"{v:.9g}" for v in r) + "\n")
+
+    def execute(self, sim):
+        if _dim(self.ctx) == 3:
+            self._execute_3d(sim)
+            return
         c, dx = self.coeffs, self.ctx.dx
         _current_pressure(sim)
         st, f = _fluid(sim)
@@ -900,9 +984,6 @@ class Lines(FunctionObject):
         for k in range(xl.size):
             row += [xl[k], surf[k]]
         self.write_row(row)
-
-        folder = self.folder / time_name(float(sim.time), self.precision)
-        folder.mkdir(parents=True, exist_ok=True)
         table = np.column_stack([a for k in range(xl.size)
                                  for a in (ys[k], ux[k], uy[k], p[k])])
         one = xl.size == 1
@@ -910,12 +991,7 @@ class Lines(FunctionObject):
                 for k in range(xl.size) for q in ("y", "Ux", "Uy", "p")]
         where = "; ".join(f"x = {xl[k]:.9g}, surface y = {surf[k]:.9g}, eta = "
                           f"{surf[k] - c.still:.9g}" for k in range(xl.size))
-        with (folder / "line.dat").open("w") as fh:
-            fh.write(f"# {self.object_name} ({self.name}) at time {sim.time:.9g}"
-                     f"{' under the crest' if c.follow == 'crest' else ''}: {where}\n")
-            fh.write("# " + "\t".join(cols) + "\n")
-            for r in table:
-                fh.write("\t".join(f"{v:.9g}" for v in r) + "\n")
+        self._write_line(sim.time, where, cols, table)
 
 
 # --- runUp -------------------------------------------------------------------------------------
