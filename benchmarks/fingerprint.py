@@ -36,6 +36,15 @@ CASES: dict[str, tuple[str, dict]] = {
     "solitaryWave": ("solitaryWave", {}),
     "solitaryWallRunup": ("solitaryWallRunup", {}),
     "solitaryCollision": ("solitaryCollision", {}),
+    # P's set-up of the wall case (its default until issue 35's study; tests/conftest.P_WALL)
+    "wallRunupP": ("solitaryWallRunup", {
+        f"{SPH}:kernel": {"type": "gaussian", "hdx": 1.3333333},
+        f"{SPH}:velocityCorrection": {"type": "xsph", "epsilon": 0.5},
+        f"{SPH}:densityFilter": {"type": "mlsReinitialisation", "every": 20},
+        f"{SPH}:particleShifting": {"type": "none"},
+        f"{SPH}:boundary.pressure": "mirror",
+        "constant/waveProperties:waves.incident.theory": "kdv2",
+        "system/sphSchemes:integrator": {"type": "predictorCorrector"}}),
     "db_repulsiveMK": (DB, {f"{SPH}:boundary": {"type": "repulsiveMonaghanKos"}}),
     "db_repulsiveMK_slip": (DB, {f"{SPH}:boundary": {"type": "repulsiveMonaghanKos",
                                                     "noSlip": False}}),
