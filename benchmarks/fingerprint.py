@@ -36,6 +36,11 @@ CASES: dict[str, tuple[str, dict]] = {
     "solitaryWave": ("solitaryWave", {}),
     "solitaryWallRunup": ("solitaryWallRunup", {}),
     "solitaryCollision": ("solitaryCollision", {}),
+    # P's set-up of the collision (KdV2 waves, P's bed: its default until issue 35's study)
+    "collisionP": ("solitaryCollision", {
+        "constant/waveProperties:waves.right.theory": "kdv2",
+        "constant/waveProperties:waves.left.theory": "kdv2",
+        f"{SPH}:boundary.pressure": "mirror"}),
     # P's set-up of the wall case (its default until issue 35's study; tests/conftest.P_WALL)
     "wallRunupP": ("solitaryWallRunup", {
         f"{SPH}:kernel": {"type": "gaussian", "hdx": 1.3333333},
