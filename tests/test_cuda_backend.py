@@ -165,8 +165,8 @@ def test_mirror_kernels_match_the_cpu_loops_under_the_simulator():
 
 def test_free_slip_mirror_ghosts_and_xsph_match_cpu_under_the_simulator(p_wall):
     """solitaryWallRunup with P's set-up: mirrorGhosts (free slip, p_G = p_a: T(3.77)-(3.80)
-    as printed) and XSPH at dx = 5 m (104 particles, 136 ghosts), with a skin of 0.2 % of the support:
-    the list built at every step (the last build's ghosts retired among the particles, new
+    as printed) and XSPH at dx = 5 m (104 particles, 136 ghosts), with a skin of 0.2 % of
+    the support: the list built at every step (the last build's ghosts retired among the particles, new
     ones made, sorted and mapped through the sort)."""
     res = _compare("solitaryWallRunup", 5.0, 3,
                    {**p_wall, "system/sphSchemes:neighbourSearch.cellSizeFactor": 1.002})

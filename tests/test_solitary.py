@@ -187,8 +187,8 @@ def _small_wall_case(tutorial, edits, setup=None):
 def test_exact_wave_starts_quiet(tutorial, p_wall):
     """Issue 35, a quiet start: the crest of the exact (Euler) solitary wave set up at t = 0
     does not breathe. The wall tutorial with P's scheme cut to a 100 m tank at d/dx = 8,
-    A/d = 0.3, the hydrostatic mirrored bed; the crest (crestTracker, surface fraction, every 0.01 s) over
-    the first 1.5 s. Breathing: max - min of eta_c(t) about its least-squares line, in % of
+    A/d = 0.3, the hydrostatic mirrored bed; the crest (crestTracker, surface fraction,
+    every 0.01 s) over the first 1.5 s. Breathing: max - min of eta_c(t) about its least-squares line, in % of
     A (benchmarks/breathing.py). Measured 0.35 %; with the set-up's old hole at the bed
     under every column where round((d + eta)/dx) rounds up (before the bottom particle kept
     half its own spacing from the bed) 7.6 %, the crest falling to 2.76 m at the column's
