@@ -86,7 +86,9 @@ def estimate(pd: ParticleDict, support: float = 2.0, hdx: float = 1.3) -> tuple[
     n += sum(_wall_length(w) * w.layers / dx for w in pd.walls.values())
     lo, hi = default_domain(pd)
     cell = support * hdx * dx
-    cells = (max(hi[0] - lo[0], cell) / cell + 1) * (max(hi[1] - lo[1], cell) / cell + 1)
+    # Python floats: a fuzzed domain's product is inf (refused by the caller), not a warning
+    cells = (max(float(hi[0] - lo[0]), cell) / cell + 1) * \
+        (max(float(hi[1] - lo[1]), cell) / cell + 1)
     return n, cells
 
 
