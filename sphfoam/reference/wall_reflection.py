@@ -107,7 +107,7 @@ class _Zakharov:
     def __init__(self, L: float, N: int, kmax: float):
         self.L, self.N = L, N
         self.x = (np.arange(N) - N // 2) * (L / N)
-        k = 2.0 * math.pi * np.fft.rfftfreq(N, L / N)
+        self.k = k = 2.0 * math.pi * np.fft.rfftfreq(N, L / N)
         self.ik = 1j * k
         self.keep = k <= min(kmax, (2.0 / 3.0) * k[-1])
 
@@ -130,7 +130,7 @@ class _HOS(_Zakharov):
     def __init__(self, L: float, N: int, order: int, kmax: float):
         super().__init__(L, N, kmax)
         self.M = order
-        k = 2.0 * math.pi * np.fft.rfftfreq(N, L / N)
+        k = self.k
         self.th = np.tanh(k)
         # d_z^n at z = 0: |k|^n, times tanh(|k|) for odd n
         self.dz = [np.where(self.keep, k**n * (self.th if n % 2 else 1.0), 0.0)
