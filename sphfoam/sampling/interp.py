@@ -111,10 +111,38 @@ def shepard(pos, vol, fields, points, kernel, h, dim) -> tuple[np.ndarray, np.nd
                           kernel.alpha(dim) / h**dim, float(kernel.support), kernel.f_jit)
 
 
-def fluid_arrays(state, dim):
-    """(positions (n, dim), volumes m/rho) of the fluid particles of ``state``."""
+@njit(cache=True)
+def _select(kind, want, x, y, z, lo, hi):
+    """Indices of the particles of ``kind`` ``want`` inside the box [lo, hi] (one pass)."""
+    out = np.empty(x.shape[0], np.int64)
+    k = 0
+    for a in range(x.shape[0]):
+        if kind[a] != want:
+            continue
+        if x[a] < lo[0] or x[a] > hi[0] or y[a] < lo[1] or y[a] > hi[1] \
+                or z[a] < lo[2] or z[a] > hi[2]:
+            continue
+        out[k] = a
+        k += 1
+    return out[:k]
+
+
+def fluid_arrays(state, dim, near=None, reach: float = 0.0):
+    """(indices, positions (n, dim), volumes m/rho) of the fluid particles of ``state``;
+    with ``near`` (points (nPoints, dim)), only those inside the points' bounding box grown
+    by ``reach`` (the kernel's support: every particle that can reach a point), found in
+    one compiled pass, so that sampling a few points costs little in a large case."""
     from sphfoam.engine.state import FLUID
 
-    f = state.kind == FLUID
-    pos = np.column_stack([a[f] for a in state.positions[:dim]])
-    return f, pos, state.m[f] / state.rho[f]
+    xyz = list(state.positions[:dim])
+    lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
+    if near is not None:
+        pts = np.asarray(near, dtype=float).reshape(-1, dim)
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        if len(pts):
+            lo[:dim], hi[:dim] = pts.min(axis=0) - reach, pts.max(axis=0) + reach
+    z = xyz[2] if dim == 3 else xyz[1]
+    sel = _select(np.ascontiguousarray(state.kind), FLUID, np.ascontiguousarray(xyz[0]),
+                  np.ascontiguousarray(xyz[1]), np.ascontiguousarray(z), lo, hi)
+    pos = np.column_stack([a[sel] for a in xyz]) if len(sel) else np.zeros((0, dim))
+    return sel, pos, state.m[sel] / state.rho[sel]

@@ -100,11 +100,12 @@ class PressureSensors(FunctionObject):
     def measure(self, state) -> tuple[np.ndarray, np.ndarray]:
         """(pressures, kernel sums) at the sensors."""
         dim = self.ctx.dim
-        f, pos, vol = fluid_arrays(state, dim)
-        if not f.any():
+        kernel = self.case.models.sph["kernel"]
+        f, pos, vol = fluid_arrays(state, dim, self.moved, kernel.support * self.ctx.h)
+        if not f.size:
             return np.full(len(self.moved), np.nan), np.zeros(len(self.moved))
-        vals, ksum = shepard(pos, vol, state.p[f][None, :], self.moved,
-                             self.case.models.sph["kernel"], self.ctx.h, dim)
+        vals, ksum = shepard(pos, vol, state.p[f][None, :], self.moved, kernel, self.ctx.h,
+                             dim)
         p = vals[0]
         p[ksum < self.coeffs.kernelSumMin] = np.nan
         return p, ksum
@@ -348,21 +349,31 @@ class Forces(FunctionObject):
             if not self.body_ids.size:
                 raise ValueError(f"forces {self.object_name!r}: no wall particles of "
                                  f"{', '.join(self.coeffs.patches)} found")
-        return wall & np.isin(state.id, self.body_ids)
+            self._is_body = np.zeros(int(state.id.max()) + 1, bool)
+            self._is_body[self.body_ids] = True
+        ids = state.id
+        known = ids < len(self._is_body)
+        mine = np.zeros(len(ids), bool)
+        mine[known] = self._is_body[ids[known]]
+        return wall & mine
 
     def measure(self, state) -> np.ndarray:
         """(4, 3): pressure force, viscous force, pressure moment, viscous moment."""
         ctx, dim = self.ctx, self.ctx.dim
         kernel = self.case.models.sph["kernel"]
         eos = self.case.models.sph["equationOfState"]
-        body = self.body(state)
-        fl = state.kind == FLUID
-        if not fl.any() or not body.any():
+        body = np.flatnonzero(self.body(state))
+        if not body.size:
+            return np.zeros((4, 3))
+        reach = kernel.support * ctx.h
+        fl, _, _ = fluid_arrays(state, dim, np.column_stack(
+            [x[body] for x in state.positions[:dim]]), reach)
+        if not fl.size:
             return np.zeros((4, 3))
         gamma = float(eos.coeffs.gamma)
 
         def arrays(sel):
-            pos = np.zeros((int(sel.sum()), 3))
+            pos = np.zeros((len(sel), 3))
             vel = np.zeros_like(pos)
             for k, (x, u) in enumerate(zip(state.positions, state.velocities)):
                 pos[:, k], vel[:, k] = x[sel], u[sel]
@@ -373,7 +384,7 @@ class Forces(FunctionObject):
 
         wpos, wvel, wm, wrho, wp, wc = arrays(body)
         fpos, fvel, fm, frho, fp, fc = arrays(fl)
-        cells = Cells(fpos, kernel.support * ctx.h)
+        cells = Cells(fpos, reach)
         o = cells.order
         gw = kernel.alpha(dim) / ctx.h ** (dim + 2)
         return _pair_forces(np.ascontiguousarray(wpos), np.ascontiguousarray(wvel), wm, wrho,

@@ -125,14 +125,15 @@ class Slices(FunctionObject):
 
     def sample(self, state) -> dict[str, np.ndarray]:
         """The fields at the grid points: p, U (n, 3), rho, kernelSum."""
-        f, pos, vol = fluid_arrays(state, 3)
+        kernel = self.case.models.sph["kernel"]
+        f, pos, vol = fluid_arrays(state, 3, self.points, kernel.support * self.ctx.h)
         n = len(self.points)
-        if not f.any():
+        if not f.size:
             nan = np.full(n, np.nan)
             return {"p": nan, "U": np.full((n, 3), np.nan), "rho": nan, "kernelSum": np.zeros(n)}
         vals, ksum = shepard(pos, vol, np.stack([state.p[f], state.u[f], state.v[f],
                                                  state.w[f], state.rho[f]]), self.points,
-                             self.case.models.sph["kernel"], self.ctx.h, 3)
+                             kernel, self.ctx.h, 3)
         vals[:, ksum < self.coeffs.kernelSumMin] = np.nan
         return {"p": vals[0], "U": vals[1:4].T.copy(), "rho": vals[4], "kernelSum": ksum}
 

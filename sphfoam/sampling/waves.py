@@ -800,9 +800,10 @@ class Probes(FunctionObject):
             from sphfoam.sampling.interp import fluid_arrays, shepard
 
             st = sim.state
-            f, pos, vol = fluid_arrays(st, 3)
+            kernel = self.case.models.sph["kernel"]
+            f, pos, vol = fluid_arrays(st, 3, pts, kernel.support * self.ctx.h)
             vals, _ = shepard(pos, vol, np.stack([st.p[f], st.u[f], st.v[f], st.w[f]]), pts,
-                              self.case.models.sph["kernel"], self.ctx.h, 3)
+                              kernel, self.ctx.h, 3)
         else:
             vals = _sample_fluid(sim, self.case, self.ctx, pts[:, 0], pts[:, 1])
         self.write_row((sim.time, *vals.T.ravel()))
@@ -927,10 +928,11 @@ class Lines(FunctionObject):
         vals = np.full((4, len(pts)), np.nan)
         good = np.isfinite(pts).all(axis=1)
         if good.any():
-            ff, pos, vol = fluid_arrays(st, 3)
+            kernel = self.case.models.sph["kernel"]
+            ff, pos, vol = fluid_arrays(st, 3, pts[good], kernel.support * self.ctx.h)
             vals[:, good], _ = shepard(pos, vol, np.stack([st.p[ff], st.u[ff], st.v[ff],
                                                            st.w[ff]]), pts[good],
-                                       self.case.models.sph["kernel"], self.ctx.h, 3)
+                                       kernel, self.ctx.h, 3)
         p, ux, uy, uz = (v.reshape(len(xy), c.nPoints) for v in vals)
         row = [sim.time]
         for k in range(len(xy)):
