@@ -64,12 +64,13 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
     pd = case.particles
     problem = None
     walls = state.kind == WALL
-    missing = [k for k in bnd.wall_fields if k not in state.extra] if walls.any() else []
+    missing = [k for k in bnd.fields_in(state.dim) if k not in state.extra] \
+        if walls.any() else []
     if case.models.motions:
         missing += [k for k in ("patch", "x0", "y0", "z0")[:1 + state.dim]
                     if k not in state.extra]
     for family, mdl in case.models.sph.items():
-        lacking = [k for k in getattr(mdl, "particle_fields", ()) if k not in state.extra]
+        lacking = [k for k in mdl.fields_in(state.dim) if k not in state.extra]
         if family != "boundary" and walls.any() and lacking and not missing:
             raise CaseError.single(SPH_PROPERTIES, family,
                                    f"the particles lack the wall field(s) {', '.join(lacking)} "
@@ -80,7 +81,7 @@ def check_wall_fields(case: Case, state: ParticleState) -> None:
         problem = f"the particles include wall particles, which {bnd.name} does not use"
     elif walls.any() and "wallDist" in state.extra:
         d = state.extra["wallDist"][walls]
-        if bnd.wall_layers == 1 and d.max() > 0.75 * pd.dx:
+        if bnd.wall_layers == 1 and d.max() > pd.dx:      # a vertex's is sqrt(3) dx / 2
             problem = "there is more than one row of wall particles"
     if problem:
         raise CaseError.single(SPH_PROPERTIES, "boundary.type",

@@ -123,6 +123,20 @@ def test_a_3d_case_refuses_what_has_no_3d_form_by_name(tmp_path):
     with pytest.raises(CaseError, match=r"boundary 'adami' has no 3-D form \(term 'wallState' "
                                         r"has code for 2-D\)"):
         Case(case).validate()
+    case = _copy(tmp_path, "f")       # repulsive walls: normals of box and block walls only
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
+          "type repulsiveMonaghanKos;")
+    _particle_dict(case, "dimension 3; dx 0.05;\n"
+                   "fluid { w { type box; min (0 0 0); max (0.4 0.4 0.2); } }\n"
+                   "walls { tank { type box; min (0 0 0); max (0.4 0.4 0.4); open top; }\n"
+                   "        pile { type cylinder; point1 (0.2 0.2 0); point2 (0.2 0.2 0.4);"
+                   " radius 0.05; } }\n")
+    from sphfoam.setup.initial import generate_case
+
+    with pytest.raises(CaseError, match=r"walls.pile.type: repulsiveMonaghanKos reads wall "
+                                        r"normals, which the 3-D set-up writes for box and "
+                                        r"block walls only"):
+        generate_case(Case(case))
 
 
 def test_2d_cases_refuse_3d_shapes_and_keep_two_components(tmp_path):
@@ -170,15 +184,23 @@ walls
     assert fluid.sum() < 40 * 20 * 15
 
 
-def test_an_extruded_dam_break_periodic_across_stays_uniform_and_matches_2d(tmp_path):
+@pytest.mark.parametrize("boundary", ["stationaryGhosts", "repulsiveMonaghanKos", "hybrid"])
+def test_an_extruded_dam_break_periodic_across_stays_uniform_and_matches_2d(tmp_path,
+                                                                           boundary):
     """A 2-D dam break and the same case extruded 12 dx across (three cells), periodic in y: after 0.1 s
     the 3-D run has no motion across (|v| at round-off) and every column of particles
     across y moves alike; its front is within a particle spacing of the 2-D run's (the
-    kernels differ: 2-D and 3-D SPH agree to a discretisation error, not to round-off)."""
+    kernels differ: 2-D and 3-D SPH agree to a discretisation error, not to round-off).
+    With DualSPHysics' stationary ghosts, the repulsive wall of Monaghan & Kos and T's
+    hybrid wall (the 3-D forms of the last two: their faces' lattices, sphfoam.models.
+    boundaries)."""
     dx = 0.02
     runs = {}
     for dim in (2, 3):
         case = _copy(tmp_path, f"d{dim}")
+        if boundary != "stationaryGhosts":
+            _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
+                  f"type {boundary};")
         _edit(case / "system" / "controlDict", r"endTime\s+1;", "endTime 0.1;")
         _edit(case / "system" / "controlDict", r"writeInterval\s+0.25;", "writeInterval 0.1;")
         if dim == 2:
@@ -278,3 +300,127 @@ walls
     ring = inside & (np.minimum.reduce([st.x - 0.4, 0.6 - st.x, 0.2 - st.y, st.y]) < 0.04)
     assert (st.kind[ring] == 1).all() and ring.sum() == 2 * (10 + 10 + 6 + 6)
     assert not (inside & ~ring).any()                  # two rows, nothing further in
+
+
+# --- repulsive and hybrid walls in 3-D ----------------------------------------------------
+_TANK_1ROW = """dimension 3; dx {dx};
+fluid {{ water {{ type box; min (0 0 0); max (0.2 0.2 0.2); }} }}
+walls {{ tank {{ type box; min (0 0 0); max (0.4 0.4 0.4); layers 3; open top; }} }}
+"""
+
+
+def _wall_force(case: Path, points) -> np.ndarray:
+    """The acceleration less gravity of a lone fluid particle at each of ``points`` beside
+    the case's wall particles (as set up): the walls' force per unit mass on it."""
+    from sphfoam.assemble import build_simulation
+    from sphfoam.engine.state import ParticleState
+    from sphfoam.setup.initial import generate_case
+
+    c = Case(case)
+    st = generate_case(c)
+    wall = st.kind != 0
+    out = []
+    for pt in points:
+        def both(a, v):
+            return np.concatenate([[v], a[wall]])
+        one = ParticleState(both(st.x, pt[0]), both(st.y, pt[1]), both(st.u, 0.0),
+                            both(st.v, 0.0), both(st.rho, 1000.0), np.full(1 + wall.sum(), st.m[0]),
+                            both(st.kind, 0), extra={k: both(a, 0.0)
+                                                     for k, a in st.extra.items()},
+                            z=both(st.z, pt[2]), w=both(st.w, 0.0))
+        sim = build_simulation(c, one)
+        sim.neighbour_update()
+        sim.eos()
+        sim.rates()
+        i = np.flatnonzero((sim.state.id == 0) & (sim.state.kind == 0))[0]
+        out.append([sim.state.ax[i], sim.state.ay[i], sim.state.az[i] + 9.81])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("boundary", ["repulsiveMonaghanKos", "repulsiveMonaghan2003"])
+def test_3d_repulsive_walls_push_along_each_face_normal_with_weights_summing_to_one(
+        tmp_path, boundary):
+    """A lone fluid particle at height y above the floor of a one-row tank feels T(3.71)'s
+    (or T(3.75)'s) Gamma(y) along the floor's normal wherever it stands on the floor's lattice
+    (the hat weights of the face's two axes sum to one), and beside the edge of the floor and
+    a side wall the sum of the two faces' forces, each along its own normal: the force of
+    the 2-D wall, exact to round-off. (All particles of one mass: m_b / (m_a + m_b) = 1/2.)"""
+    dx = 0.02
+    case = _copy(tmp_path)
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
+          f"type {boundary};")
+    _particle_dict(case, _TANK_1ROW.format(dx=dx))
+    c = Case(case)
+    ctx = c.context
+    zb = -dx / 2                               # the floor's row of wall particles
+
+    def gamma(y):
+        if boundary == "repulsiveMonaghanKos":
+            q = y / (2 * dx)
+            return 0.01 * ctx.c0 ** 2 / ctx.h * (1 - q) / np.sqrt(q) if q < 1 else 0.0
+        q, beta = y / ctx.h, 0.02 * ctx.c0 ** 2 / y
+        f = 2 / 3 if q < 2 / 3 else (2 * q - 1.5 * q * q if q < 1 else 0.5 * (2 - q) ** 2)
+        return 0.5 * beta * f if q < 2 else 0.0          # m_b / (m_a + m_b) = 1/2
+
+    y = 0.8 * dx
+    mid = [(0.2 + s * dx, 0.2 + t * dx, zb + y) for s, t in
+           ((0, 0), (0.5, 0), (0.3, 0.7), (-0.45, 0.2))]
+    a = _wall_force(case, mid)
+    assert np.allclose(a[:, 2], gamma(y), rtol=1e-12)
+    assert np.abs(a[:, :2]).max() < 1e-9 * gamma(y)
+    xs, ys = 0.7 * dx, 1.1 * dx               # beside the side wall x = 0 and the floor
+    a = _wall_force(case, [(-dx / 2 + xs, 0.2 + 0.3 * dx, zb + ys)])[0]
+    assert a[0] == pytest.approx(gamma(xs), rel=1e-12)
+    assert a[2] == pytest.approx(gamma(ys), rel=1e-12)
+    assert abs(a[1]) < 1e-9 * gamma(xs)
+
+
+def test_3d_wall_geometry_of_a_tank_and_a_block_on_its_floor(tmp_path):
+    """The set-up's 3-D wall normals for one row: a tank's faces, edges and vertices belong
+    to one, two and three faces (the signs of their normals into the water); a block on the
+    floor has no bottom face (it stands on the tank); the hybrid wall's nFull counts the
+    lattice sites in the support in front of the faces (a quarter space on an edge)."""
+    from sphfoam.setup.initial import generate_case
+
+    dx = 0.05
+    case = _copy(tmp_path)
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type hybrid;")
+    _particle_dict(case, f"""dimension 3; dx {dx};
+fluid {{ water {{ type box; min (0 0 0); max (0.6 0.6 0.2); }} }}
+walls
+{{
+    tank  {{ type box; min (0 0 0); max (0.6 0.6 0.4); layers 1; open top; }}
+    block {{ type block; min (0.1 0.1 0); max (0.2 0.2 0.1); layers 1; }}
+}}
+""")
+    c = Case(case)
+    st = generate_case(c)
+    w = st.kind != 0
+    pos = np.column_stack(st.positions)[w]
+    n = np.column_stack([st.extra[k][w] for k in ("nx", "ny", "nz")])
+    corner = st.extra["corner"][w]
+    assert set(np.unique(n)) <= {-1.0, 0.0, 1.0}
+    assert np.array_equal(corner, np.abs(n).sum(axis=1) - 1)
+    h = dx / 2
+    floor = np.isclose(pos[:, 2], -h) & (np.abs(pos[:, :2] - 0.425) < 0.03).all(axis=1)
+    assert floor.any() and (n[floor] == [0, 0, 1]).all()
+    edge = np.isclose(pos[:, 2], -h) & np.isclose(pos[:, 0], -h) & \
+        (np.abs(pos[:, 1] - 0.4) < 0.08)
+    assert edge.any() and (n[edge] == [1, 0, 1]).all()
+    vertex = np.isclose(pos, [0.6 + h, -h, -h]).all(axis=1)
+    assert (n[vertex] == [-1, 1, 1]).all()
+    block = (pos[:, :2] > 0.1).all(axis=1) & (pos[:, :2] < 0.2).all(axis=1)
+    top = block & np.isclose(pos[:, 2], 0.1 - h)
+    assert top.any() and (n[top][:, 2] == 1).all()
+    low = block & np.isclose(pos[:, 2], h) & (np.abs(pos[:, 0] - 0.15) < 0.03) & \
+        (np.abs(pos[:, 1] - 0.15) < 0.03)
+    assert not (n[low][:, 2] < 0).any()                  # no face on the tank's floor
+    side = block & np.isclose(pos[:, 0], 0.1 + h) & np.isclose(pos[:, 2], h)
+    assert side.any() and (n[side][:, 0] == -1).all() and (n[side][:, 2] == 0).all()
+    r = c.context.support / dx
+    k = np.arange(-4, 5)
+    off = np.stack(np.meshgrid(k, k, k, indexing="ij"), -1).reshape(-1, 3)
+    inside = (off ** 2).sum(1) < r * r - 1e-9
+    nfull = st.extra["nFull"][w]
+    assert (nfull[floor] == np.sum(inside & (off[:, 2] >= 1))).all()
+    assert (nfull[edge] == np.sum(inside & (off[:, 2] >= 1) & (off[:, 0] >= 1))).all()

@@ -157,7 +157,7 @@ class Plan:
         self.kinds, self.viscous_dry_walls = self._kinds()
         self.fields = []
         for m in self.models:
-            for f in m.particle_fields:
+            for f in m.fields_in(sel.dim):
                 if f not in self.fields:
                     self.fields.append(f)
         T.check(self.terms, set(self.fields), self.kinds, sel.dim)

@@ -37,6 +37,10 @@ import re
 import textwrap
 from dataclasses import dataclass, field, replace
 
+#: per-particle fields that exist in three dimensions only (read as ``fld[F_n@, b]`` expands
+#: them: a 2-D case neither sets them up nor reads them)
+THREE_D_FIELDS = ("nz",)
+
 #: stages of a time step, in the order of the generated module
 STAGES = {
     "particle": "per particle, no neighbours (the equation of state: p, c from rho)",
@@ -448,7 +452,7 @@ def check(terms: list[Term], fields: set[str], kinds_defined: dict[str, object],
                     raise ContractError(f"{t.who()} reads the auxiliary field {r[4:]!r}, "
                                         "which no selected model writes")
             elif r.startswith("field."):
-                if r[6:] not in fields:
+                if r[6:] not in fields and (dim == 3 or r[6:] not in THREE_D_FIELDS):
                     raise ContractError(f"{t.who()} reads the particle field {r[6:]!r}, "
                                         "which the selected boundary does not set up")
             elif r in EXCLUSIVE:

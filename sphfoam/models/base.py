@@ -68,7 +68,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 from sphfoam.context import CaseContext
-from sphfoam.engine.terms import Term
+from sphfoam.engine.terms import THREE_D_FIELDS, Term
 from sphfoam.registry import Model
 
 __all__ = ["CaseContext", "PipelineModel", "Term", "HOOK_NAMES"]
@@ -90,6 +90,11 @@ class PipelineModel(Model):
     #: forms`), and the hooks it stands for
     device_form: ClassVar[str] = ""
     device_hooks: ClassVar[tuple[str, ...]] = ()
+
+    def fields_in(self, dim: int) -> tuple[str, ...]:
+        """The ``particle_fields`` a case of ``dim`` dimensions has: the z component of a
+        wall normal (``nz``) only in 3-D."""
+        return tuple(f for f in self.particle_fields if dim == 3 or f not in THREE_D_FIELDS)
 
     def terms(self) -> list[Term]:
         return []

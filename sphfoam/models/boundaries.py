@@ -20,10 +20,21 @@ normal ``fld[F_nx, b], fld[F_ny, b]`` (into the fluid) stored per wall particle 
 (``sphfoam.case.geometry``). Corner treatment: a wall particle at a corner vertex (flag
 ``corner``) has no single normal, so it repels radially, along r_ab, with chi = 1 (the force
 of a point rather than of a wall); its neighbours along either wall act with their own normals.
+
+In three dimensions (axis-aligned walls: ``box`` tanks and ``block`` solids) the wall
+particles of a face lie on a square lattice of side dx, and the tangential weight is the
+product of the hat functions of T(3.76) along the face's two axes, chi = (1 - |t_1|/dx)+
+(1 - |t_2|/dx)+, which sums to one over the face as chi(x) does along a 2-D wall. A particle
+on an edge or at a vertex belongs to the lattices of its two or three faces and acts once
+for each, along each face's normal (``n`` holds, per axis, the sign of the normal of each
+face it belongs to): the force on a fluid particle beside two faces is the sum of the two
+faces' forces, with no extra radial push (a 2-D corner's radial force, repeated along every
+particle of an edge, would push the whole edge row of fluid off the walls).
 """
 
 from __future__ import annotations
 
+import textwrap
 from typing import Literal
 
 import numpy as np
@@ -101,11 +112,32 @@ else:
     chi = 1.0 - xt / bnd_dx if xt < bnd_dx else 0.0
 """
 
+#: 3-D, axis-aligned walls: n holds, per axis, the sign of the normal of each face the wall
+#: particle b belongs to (one on a face, two on an edge, three at a vertex); for each such face
+#: the force acts along its normal with yn the distance from b's plane and chi the product
+#: of the hat weights T(3.76) along the face's two axes, for a fluid particle in front of b's
+#: plane (yn > 0: one beside another face of a block, below its top's plane, is not pushed up)
+_HAT = "(1.0 - abs(d{0}_ab) / bnd_dx if abs(d{0}_ab) < bnd_dx else 0.0)"
+
+
+def _faces_3d(force: str) -> str:
+    """The 3-D pair code: ``force`` once for each face of the lattice b belongs to."""
+    out = []
+    for ax, (o1, o2) in (("x", "yz"), ("y", "xz"), ("z", "xy")):
+        out.append(f"if fld[F_n{ax}, b] != 0.0 and d{ax}_ab * fld[F_n{ax}, b] > 0.0:\n"
+                   f"    bn@ = 0.0\n"
+                   f"    bn{ax} = fld[F_n{ax}, b]\n"
+                   f"    yn = d{ax}_ab * bn{ax}\n"
+                   f"    chi = {_HAT.format(o1)} * {_HAT.format(o2)}\n"
+                   + textwrap.indent(force, "    "))
+    return "".join(out)
+
+
 #: Monaghan & Kos (1999), T(3.70)-(3.72): f = n Gamma(y) chi(x), Gamma = A (1 - q)/sqrt(q),
 #: q = y / range, A = (0.01 c0^2 + beta c0 v_n)/h with v_n the speed of approach (beta = 1 when
 #: approaching, else 0). y is floored at bnd_ymin so a particle that crossed the line is pushed
 #: back with a large but finite force.
-_MONAGHAN_KOS = _GEOMETRY + """\
+_MONAGHAN_KOS_FORCE = """\
 if chi > 0.0 and yn < bnd_range:
     qn = max(yn, bnd_ymin) / bnd_range
     vn = -dot(U@_ab, bn@)
@@ -118,7 +150,7 @@ if chi > 0.0 and yn < bnd_range:
 
 #: Monaghan et al. (2003), T(3.73)-(3.76): f_ab = m_b/(m_a + m_b) Gamma(y) chi(x) n_b,
 #: q = y/h, beta = 0.02 c0^2 / y.
-_MONAGHAN_2003 = _GEOMETRY + """\
+_MONAGHAN_2003_FORCE = """\
 if chi > 0.0 and yn < 2.0 * h:
     ye = max(yn, bnd_ymin)
     qn = ye * inv_h
@@ -135,16 +167,18 @@ if chi > 0.0 and yn < 2.0 * h:
 """
 
 
-#: the wall fields the repulsive forces read
-_GEOMETRY_READS = ("field.nx", "field.ny", "field.corner")
-#: the wall geometry (normal, tangential distance) is written for 2-D walls only
-_GEOMETRY_DIMS = (2,)
+#: the forces per dimension: the geometry above, then the force
+_MONAGHAN_KOS = {2: _GEOMETRY + _MONAGHAN_KOS_FORCE, 3: _faces_3d(_MONAGHAN_KOS_FORCE)}
+_MONAGHAN_2003 = {2: _GEOMETRY + _MONAGHAN_2003_FORCE, 3: _faces_3d(_MONAGHAN_2003_FORCE)}
+
+#: the wall fields the repulsive forces read (nz in 3-D; written 0 in 2-D)
+_GEOMETRY_READS = ("field.nx", "field.ny", "field.nz", "field.corner")
 
 
 class _Repulsive(Boundary):
     wall_layers = 1
-    wall_fields = ("nx", "ny", "corner", "wallDist")
-    force_code = ""
+    wall_fields = ("nx", "ny", "nz", "corner", "wallDist")
+    force_code: dict = {}
 
     class Coeffs(_NoSlip):
         pass
@@ -155,8 +189,7 @@ class _Repulsive(Boundary):
 
     def terms(self):
         return [Term("wallForce", ("rates",), pair=self.force_code, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False,
-                     dims=_GEOMETRY_DIMS)]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]
 
 
 @register
@@ -447,7 +480,7 @@ class Hybrid(Boundary):
     name = "hybrid"
     doc = ("hybrid wet/dry boundary, T §3.9: stationary ghosts once a wall particle has its "
            "required fluid pairs, Monaghan-Kos force within dx while dry")
-    wall_fields = ("nx", "ny", "corner", "wallDist", "nFull")
+    wall_fields = ("nx", "ny", "nz", "corner", "wallDist", "nFull")
 
     class Coeffs(_NoSlip):
         wetFraction: float = Field(0.75, gt=0.0, le=1.0, description=(
@@ -479,5 +512,4 @@ else:
                      init="bnd_count = 0", pair="bnd_count += 1", final=self._STEP_FINAL,
                      reads=("field.nFull",), writes=("aux.bnd_wet", "rho"), weighted=False),
                 Term("wallForce", ("rates",), pair=_MONAGHAN_KOS, sees=("dryWall",),
-                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False,
-                     dims=_GEOMETRY_DIMS)]
+                     reads=_GEOMETRY_READS, writes=("acc",), weighted=False)]

@@ -42,7 +42,8 @@ def generate_case(case: Case) -> ParticleState:
                           boundary=sph["boundary"], moving=bool(case.models.motions),
                           waves=list(case.waves.values()),
                           fields=[f for m in sph.values()
-                                  for f in getattr(m, "particle_fields", ())])
+                                  for f in getattr(m, "particle_fields", ())],
+                          support_radius=case.context.support)
     return generate(case.particles, case.context, sph["equationOfState"],
                     boundary=sph["boundary"], support_radius=case.context.support,
                     moving=bool(case.models.motions), waves=list(case.waves.values()),

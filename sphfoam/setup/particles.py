@@ -271,7 +271,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     dy = np.concatenate([dyf, np.full(xw.size, dx)])
     extra = {}
     # the distance behind the wall is always written: it records how the walls were set up
-    wanted = set(getattr(boundary, "wall_fields", ())) | {"wallDist"} | \
+    wanted = set(boundary.fields_in(2) if boundary is not None else ()) | {"wallDist"} | \
         {f for f in fields if f in WALL_METADATA}
     if wanted and xw.size:
         nx, ny, dist, corner, _ = wall_metadata(segs, xw, yw, dx)

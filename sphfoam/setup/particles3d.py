@@ -20,8 +20,8 @@ from scipy.spatial import cKDTree
 
 from sphfoam.case.errors import CaseError
 from sphfoam.case.geometry import LATTICE_TOLERANCE, lattice_count
-from sphfoam.case.schemas import BoxRegion, BoxWalls, MeshWalls, ParticleDict
-from sphfoam.case.solids import bounds, signed_distance, tank_wall_depth
+from sphfoam.case.schemas import BlockWalls, BoxRegion, BoxWalls, MeshWalls, ParticleDict
+from sphfoam.case.solids import FACE_AXES, bounds, signed_distance, tank_wall_depth
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.setup.particles import wall_pressure
 from sphfoam.setup.waves import fields as wave_fields
@@ -121,24 +121,101 @@ def local_surface(p: np.ndarray, dx: float) -> np.ndarray:
     return top[col] + 0.5 * dx
 
 
-def _refuse(boundary, fields) -> None:
+#: the wall fields the 3-D set-up writes for axis-aligned walls (``wall_geometry``)
+GEOMETRY_FIELDS = ("nx", "ny", "nz", "corner", "nFull")
+
+
+def _refuse(boundary, fields, walls=()) -> None:
     """What the 3-D set-up cannot make, refused by name."""
     if getattr(boundary, "wall_placement", "rows") == "none":
         raise CaseError.single("constant/sphProperties", "boundary.type", (
             f"{boundary.name} has no 3-D form (its walls are lines to mirror across): use "
             "stationaryGhosts"))
-    lacking = [f for f in tuple(getattr(boundary, "wall_fields", ())) + tuple(fields)
-               if f != "wallDist"]
+    wanted = set(getattr(boundary, "wall_fields", ())) | set(fields)
+    lacking = wanted - {"wallDist"} - set(GEOMETRY_FIELDS)
     if lacking:
         raise CaseError.single("constant/sphProperties", "boundary.type", (
-            f"the selected models read the wall field(s) {', '.join(sorted(set(lacking)))}, "
+            f"the selected models read the wall field(s) {', '.join(sorted(lacking))}, "
             "which have no 3-D form: use stationaryGhosts"))
+    if wanted & set(GEOMETRY_FIELDS):
+        for name, w in walls:
+            if not isinstance(w, (BoxWalls, BlockWalls)):
+                raise CaseError.single(PD, f"walls.{name}.type", (
+                    f"{getattr(boundary, 'name', 'the boundary')} reads wall normals, which "
+                    f"the 3-D set-up writes for box and block walls only (plane faces on "
+                    f"the lattice), not for a {w.type}: use stationaryGhosts or adami"))
+
+
+def _behind(w, p: np.ndarray) -> np.ndarray:
+    """Whether the points lie behind (in) the wall entry ``w``: beyond the plane of one of a
+    tank's closed sides (its walls continued past its open sides, as a periodic or open
+    channel continues them), inside a solid."""
+    if isinstance(w, BoxWalls):
+        lo, hi = np.asarray(w.min, float), np.asarray(w.max, float)
+        out = np.zeros(len(p), bool)
+        for face, (axis, side) in FACE_AXES.items():
+            if face not in w.open:
+                out |= p[:, axis] > hi[axis] if side else p[:, axis] < lo[axis]
+        return out
+    return signed_distance(w, p) < 0.0
+
+
+def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
+                  support_radius: float | None = None) -> dict[str, np.ndarray]:
+    """Per wall particle of box tanks and block solids (axis-aligned plane faces): per axis,
+    the sign of the normal (into the fluid) of each face the particle belongs to (nx, ny, nz:
+    one nonzero on a face, two on an edge, three at a vertex; sphfoam.models.boundaries) and
+    ``corner``, the faces it belongs to less one. A block's face that lies on another wall (a
+    block standing on the tank's floor) is not a face. With ``support_radius``, ``nFull``: the lattice sites inside the
+    support that are behind no wall, the pairs the particle forms fully submerged (T §3.9)."""
+    n = np.zeros((len(pw), 3))
+    corner = np.zeros(len(pw))
+    for i, w in enumerate(walls):
+        sel = np.flatnonzero(patch == i)
+        if not sel.size:
+            continue
+        p = pw[sel]
+        lo, hi = np.asarray(w.min, float), np.asarray(w.max, float)
+        if isinstance(w, BoxWalls):
+            into = np.clip(lo - p, 0.0, None) - np.clip(p - hi, 0.0, None)   # into the tank
+            near = np.abs(into) > 0.25 * dx
+            out = np.sign(into)
+        else:
+            depth = np.stack([p - lo, hi - p])                 # (2, n, 3): below, above
+            for side, edge in ((0, lo), (1, hi)):
+                for axis in range(3):      # a face on another wall is no face
+                    c = 0.5 * (lo + hi)
+                    c[axis] = edge[axis] + (0.5 * dx if side else -0.5 * dx)
+                    if any(_behind(o, c[None, :])[0] for k, o in enumerate(walls) if k != i):
+                        depth[side, :, axis] = np.inf
+            d = depth.min(axis=0)
+            out = np.where(depth[1] < depth[0], 1.0, -1.0)
+            near = d <= d.min(axis=1)[:, None] + 0.25 * dx
+        n[sel] = np.where(near, out, 0.0)
+        corner[sel] = np.maximum(near.sum(axis=1) - 1, 0)
+    geo = {"nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2], "corner": corner}
+    if support_radius is not None:
+        r = support_radius / dx
+        k = int(np.ceil(r)) + 1
+        g = np.arange(-k, k + 1, dtype=float)
+        off = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+        r2 = (off ** 2).sum(axis=1)
+        off = off[(r2 > 0) & (r2 < r * r - 1e-9)] * dx
+        full = np.zeros(len(pw))
+        for start in range(0, len(pw), 4096):
+            q = (pw[start:start + 4096, None, :] + off[None, :, :]).reshape(-1, 3)
+            wet = np.ones(len(q), bool)
+            for w in walls:
+                wet &= ~_behind(w, q)
+            full[start:start + 4096] = wet.reshape(-1, len(off)).sum(axis=1)
+        geo["nFull"] = full
+    return geo
 
 
 def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, waves=(),
-               fields=()) -> ParticleState:
+               fields=(), support_radius: float | None = None) -> ParticleState:
     """Particles of a 3-D case at rest in hydrostatic equilibrium (see the module)."""
-    _refuse(boundary, fields)
+    _refuse(boundary, fields, list(pd.walls.items()))
     dx = pd.dx
     tol = 1 - LATTICE_TOLERANCE
     anchor = case_anchor(pd)
@@ -220,6 +297,12 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
     kind = np.concatenate([np.full(len(pf), FLUID), np.full(len(pw), WALL)])
     dz = np.concatenate([dzf, np.full(len(pw), dx)])
     extra = {"wallDist": np.concatenate([np.zeros(len(pf)), dw])} if len(pw) else {}
+    wanted = (set(getattr(boundary, "wall_fields", ())) | set(fields)) & set(GEOMETRY_FIELDS)
+    if wanted and len(pw):
+        geo = wall_geometry(walls, pw, patch, dx,
+                            support_radius if "nFull" in wanted else None)
+        for k in wanted:
+            extra[k] = np.concatenate([np.zeros(len(pf)), geo[k]])
     if moving:          # the wall entry of each wall particle and where prescribed motion
         extra["patch"] = np.concatenate([np.full(len(pf), -1.0),  # displaces it from
                                          patch.astype(float) if len(pw) else np.zeros(0)])
