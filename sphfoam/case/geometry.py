@@ -180,14 +180,14 @@ def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
     return nx, ny, d, corner, patch
 
 
-def lattice_offsets(radius_in_dx: float) -> np.ndarray:
-    """Offsets (i, j), in units of dx, of the lattice sites other than the centre closer
+def lattice_offsets(radius_in_dx: float, dim: int = 2) -> np.ndarray:
+    """Offsets (i, j[, k]), in units of dx, of the lattice sites other than the centre closer
     than ``radius``: the pairs a particle forms inside a lattice-filled support."""
     n = int(math.ceil(radius_in_dx)) + 1
-    i, j = np.meshgrid(np.arange(-n, n + 1), np.arange(-n, n + 1))
-    r2 = i * i + j * j
+    axes = np.meshgrid(*[np.arange(-n, n + 1)] * dim)
+    r2 = sum(a * a for a in axes)
     inside = (r2 > 0) & (r2 < radius_in_dx ** 2 - 1e-9)
-    return np.column_stack([i[inside], j[inside]]).astype(float)
+    return np.column_stack([a[inside] for a in axes]).astype(float)
 
 
 def fluid_side(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float) -> np.ndarray:

@@ -171,7 +171,7 @@ if chi > 0.0 and yn < 2.0 * h:
 _MONAGHAN_KOS = {2: _GEOMETRY + _MONAGHAN_KOS_FORCE, 3: _faces_3d(_MONAGHAN_KOS_FORCE)}
 _MONAGHAN_2003 = {2: _GEOMETRY + _MONAGHAN_2003_FORCE, 3: _faces_3d(_MONAGHAN_2003_FORCE)}
 
-#: the wall fields the repulsive forces read (nz in 3-D; written 0 in 2-D)
+#: the wall fields the repulsive forces read (nz in 3-D only: terms.THREE_D_FIELDS)
 _GEOMETRY_READS = ("field.nx", "field.ny", "field.nz", "field.corner")
 
 

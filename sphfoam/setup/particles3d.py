@@ -19,7 +19,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sphfoam.case.errors import CaseError
-from sphfoam.case.geometry import LATTICE_TOLERANCE, lattice_count
+from sphfoam.case.geometry import LATTICE_TOLERANCE, lattice_count, lattice_offsets
 from sphfoam.case.schemas import BlockWalls, BoxRegion, BoxWalls, MeshWalls, ParticleDict
 from sphfoam.case.solids import FACE_AXES, bounds, signed_distance, tank_wall_depth
 from sphfoam.engine.state import FLUID, WALL, ParticleState
@@ -166,8 +166,9 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
     the sign of the normal (into the fluid) of each face the particle belongs to (nx, ny, nz:
     one nonzero on a face, two on an edge, three at a vertex; sphfoam.models.boundaries) and
     ``corner``, the faces it belongs to less one. A block's face that lies on another wall (a
-    block standing on the tank's floor) is not a face. With ``support_radius``, ``nFull``: the lattice sites inside the
-    support that are behind no wall, the pairs the particle forms fully submerged (T §3.9)."""
+    block standing on the tank's floor) is not a face. With ``support_radius``, ``nFull``:
+    the lattice sites inside the support that are behind no wall, the pairs the particle
+    forms fully submerged (T §3.9)."""
     n = np.zeros((len(pw), 3))
     corner = np.zeros(len(pw))
     for i, w in enumerate(walls):
@@ -195,12 +196,7 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
         corner[sel] = np.maximum(near.sum(axis=1) - 1, 0)
     geo = {"nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2], "corner": corner}
     if support_radius is not None:
-        r = support_radius / dx
-        k = int(np.ceil(r)) + 1
-        g = np.arange(-k, k + 1, dtype=float)
-        off = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
-        r2 = (off ** 2).sum(axis=1)
-        off = off[(r2 > 0) & (r2 < r * r - 1e-9)] * dx
+        off = lattice_offsets(support_radius / dx, 3) * dx
         full = np.zeros(len(pw))
         for start in range(0, len(pw), 4096):
             q = (pw[start:start + 4096, None, :] + off[None, :, :]).reshape(-1, 3)
