@@ -68,6 +68,21 @@ def test_axes_make_every_combination_and_resolutions_multiply(flume):
     assert s.edits["extra_dx0.1"]["system/controlDict:maxCo"] == 0.3
 
 
+def test_a_variants_own_resolutions_and_only_one_run(flume):
+    p = write_study(flume, """
+        resolutions (0.1 0.05);
+        variants { a { maxCo 0.3; } b { resolutions (0.1 0.05 0.025); } }""")
+    assert [r.name for r in st.load(p).runs] == ["a_dx0.1", "a_dx0.05", "b_dx0.1",
+                                                 "b_dx0.05", "b_dx0.025"]
+    (fine,) = st.load(p, ["b_dx0.025"]).runs
+    assert fine.dx == 0.025 and st.load(p, ["b_dx0.025"]).edits[fine.name] == {
+        "system/particleDict:dx": 0.025}
+    assert [r.name for r in st.load(p, ["a"]).runs] == ["a_dx0.1", "a_dx0.05"]
+    with pytest.raises(CaseError) as e:
+        st.load(p, ["a_dx0.025"])
+    assert "no such variant or run" in str(e.value.problems[0])
+
+
 @pytest.mark.parametrize("body, key, words", [
     ("variants { a { viscosty.type laminar; } }", "variants.a.viscosty.type",
      ["not an entry", "viscosity"]),
@@ -76,6 +91,8 @@ def test_axes_make_every_combination_and_resolutions_multiply(flume):
     ("variants { a { \"system/nowhere:x\" 1; } }", "variants.a.system/nowhere:x",
      ["no dictionary"]),
     ("variants { a { } } resolutions (0.1 -1);", "resolutions", ["> 0"]),
+    ("variants { a { resolutions (0.1 0); } }", "variants.a.resolutions", ["> 0"]),
+    ("variants { a { resolutions (x); } }", "variants.a.resolutions", ["particle spacings"]),
     ("variants { a { } } jobs 0;", "jobs", ["greater than or equal to 1"]),
     ("variants { a { } } colour red;", "colour", ["colour"]),
 ])

@@ -55,7 +55,8 @@ class StudyDict(Strict):
         "name { description \"...\"; key value; ... }: dictionary overrides of each variant. "
         "A key is a dotted path whose first word names an entry of one of the case's "
         "dictionaries (viscosity.type, maxCo, dx, waves.incident.height) or, in quotes, "
-        "\"system/controlDict:endTime\"; a sub-dictionary value replaces the whole entry"))
+        "\"system/controlDict:endTime\"; a sub-dictionary value replaces the whole entry. "
+        "A variant's own resolutions (dx list) replace the study's for that variant"))
     axes: dict[str, dict[str, dict[str, Any]]] = Field(default_factory=dict, description=(
         "axis { level { overrides } ... }: every combination of one level per axis is a run "
         "(named level_level...), listed before the variants"))
@@ -78,6 +79,18 @@ class StudyDict(Strict):
         if any(not (x > 0) for x in v):
             raise ValueError("every resolution (dx) must be > 0")
         return v
+
+
+def _own_resolutions(v) -> list[float] | str:
+    """A variant's own ``resolutions``: positive spacings, or the reason they are not."""
+    vals = v if isinstance(v, (list, tuple)) else [v]
+    try:
+        dxs = [float(x) for x in vals]
+    except (TypeError, ValueError):
+        return f"expected a list of particle spacings dx (m), got {v!r}"
+    if not dxs or any(not (x > 0) for x in dxs):
+        return f"every resolution (dx) must be > 0, got {v!r}"
+    return dxs
 
 
 @dataclass
@@ -200,11 +213,20 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
             problems.append(Problem(rel, where, str(e)))
             return False
 
+    own_dx: dict[str, list[float]] = {}
+
     def edits_of(where: str, overrides: dict) -> tuple[str, dict]:
         out, desc = {}, ""
         for k, v in overrides.items():
             if k == "description":
                 desc = str(v)
+                continue
+            if k == "resolutions" and where.startswith("variants."):
+                dxs = _own_resolutions(v)
+                if isinstance(dxs, str):
+                    problems.append(Problem(rel, f"{where}.resolutions", dxs))
+                else:
+                    own_dx[where.removeprefix("variants.")] = dxs
                 continue
             r = resolve_key(files, str(k))
             if isinstance(r, str):
@@ -250,22 +272,27 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
         problems.append(Problem(rel, "baseline", f"'{spec.baseline}' is not a variant"
                                 f"{did_you_mean(spec.baseline, names)} variants: "
                                 f"{', '.join(names)}"))
+    dxs = spec.resolutions or [None]
+
+    def run_name(name, dx):
+        return name if dx is None else f"{name}_dx{dx:g}"
+
     if only:
-        unknown = [o for o in only if o not in names]
+        runs = {run_name(n, dx) for n in names for dx in own_dx.get(n, dxs)}
+        unknown = [o for o in only if o not in names and o not in runs]
         if unknown:
             problems.append(Problem(rel, "variants", f"--only {', '.join(unknown)}: no such "
-                                    f"variant; variants: {', '.join(names)}"))
+                                    f"variant or run; variants: {', '.join(names)}"))
     if problems:
         raise CaseError(problems)
     from sphfoam.case.metrics_dict import load_metrics
 
     load_metrics(base, spec.metrics, source=rel)       # bad metrics: one screen, before runs
-    dxs = spec.resolutions or [None]
     for name, desc, ed in variants:
-        if only and name not in only:
-            continue
-        for dx in dxs:
-            run = name if dx is None else f"{name}_dx{dx:g}"
+        for dx in own_dx.get(name, dxs):
+            run = run_name(name, dx)
+            if only and name not in only and run not in only:
+                continue
             edits = {**common, **ed}
             if dx is not None:
                 edits["system/particleDict:dx"] = dx
