@@ -114,6 +114,30 @@ def test_3d_gauge_recovers_a_plane_surface_sloping_in_x_and_y():
     assert np.allclose(got, want, rtol=0, atol=1e-12)
 
 
+def test_3d_wire_gauge_ignores_a_splash_above_the_water():
+    """A 3-D lattice of water 0.2 m deep with a sheet three rows thick 0.2 m above it over
+    part of the gauges: the fraction gauge reads the sheet's top, the wire gauge the water's
+    surface plus the sheet's thickness (3 dx, to 0.1 dx); where no sheet passes they read
+    the same to 1e-9 m."""
+    from sphfoam.models.kernels import WendlandC2
+    from sphfoam.sampling.waves import fraction_surface_3d, wire_surface_3d
+
+    dx, k = 0.02, WendlandC2()
+    h = 1.3 * dx
+    c = dx * (np.arange(20) + 0.5)
+    X, Y, Z = (a.ravel() for a in np.meshgrid(c, c, dx * (np.arange(10) + 0.5)))
+    sX, sY, sZ = (a.ravel() for a in np.meshgrid(c[:10], c, 0.4 + dx * (np.arange(3) + 0.5)))
+    x, y, z = np.concatenate([X, sX]), np.concatenate([Y, sY]), np.concatenate([Z, sZ])
+    v = np.full(x.size, dx**3)
+    g = np.array([[0.1, 0.2], [0.3, 0.2]])           # under the sheet, clear of it
+    frac = fraction_surface_3d(x, y, z, v, g, k, h, dx)
+    wire = wire_surface_3d(x, y, z, v, g, k, h, dx)
+    water = fraction_surface_3d(X, Y, Z, v[:X.size], g, k, h, dx)
+    assert abs(water[0] - 0.2) <= 0.05 * dx and abs(frac[0] - 0.4 - 3 * dx) <= 0.1 * dx
+    assert abs(wire[0] - water[0] - 3 * dx) <= 0.1 * dx
+    assert abs(wire[1] - frac[1]) <= 1e-9
+
+
 def test_3d_gauges_and_probes_at_rest(tmp_path):
     """The 3-D tank at rest: particle gauges read H = 0.4 m exactly (lattice tops + dx/2),
     fraction gauges away from the walls within 0.01 dx; a line of gauges adds its points;
@@ -128,6 +152,9 @@ def test_3d_gauges_and_probes_at_rest(tmp_path):
     fr = _fo(c, {"type": "waveGauges", "points": [[0.2, 0.2], [0.14, 0.26]],
                  "surface": "fraction"})
     assert np.allclose(fr.measure_3d(st, f), 0.4, rtol=0, atol=0.01 * 0.04)
+    wi = _fo(c, {"type": "waveGauges", "points": [[0.2, 0.2], [0.14, 0.26]],
+                 "surface": "wire"})
+    assert np.allclose(wi.measure_3d(st, f), fr.measure_3d(st, f), rtol=0, atol=1e-9)
     pr = _fo(c, {"type": "probes", "points": [[0.2, 0.2, 0.2]]})
     assert pr.columns == ("time", "p(0.2,0.2,0.2)", "Ux(0.2,0.2,0.2)", "Uy(0.2,0.2,0.2)",
                           "Uz(0.2,0.2,0.2)")

@@ -431,6 +431,35 @@ def test_fraction_surface_with_disordered_particles():
     assert np.max(np.abs(eta - (SURFACES["sine"](g) - D))) <= 0.15 * DX
 
 
+def _sheet(x0, x1, bottom, rows, dx=DX):
+    """A detached sheet: ``rows`` lattice rows from ``bottom`` over x0..x1 (a splash)."""
+    xs = (np.arange(int(round((x1 - x0) / dx))) + 0.5) * dx + x0
+    X, Y = np.meshgrid(xs, bottom + (np.arange(rows) + 0.5) * dx)
+    return X.ravel(), Y.ravel(), np.full(X.size, dx * dx)
+
+
+@pytest.mark.parametrize("kernel", KERNELS, ids=lambda k: k.name)
+def test_wire_gauge_reads_a_column_as_the_fraction_gauge_and_a_splash_by_its_thickness(kernel):
+    """One column of water: the wire gauge's lowest wet height plus its wetted length is the
+    fraction gauge's surface (the same crossing, to 1e-9 m). A sheet three rows thick passing
+    0.3 m above the water: the fraction gauge reads the sheet's top, the wire gauge the
+    water's surface plus the sheet's thickness, 3 dx to 0.1 dx."""
+    S = SURFACES["sine"]
+    x, y, v = columns(S)
+    g = np.linspace(2.0, 4.0, 41)
+    h = kernel.coeffs.hdx * DX
+    frac = waves.fraction_surface(x, y, v, g, kernel, h, DX, still=D)
+    wire = waves.wire_surface(x, y, v, g, kernel, h, DX, still=D)
+    assert np.max(np.abs(wire - frac)) <= 1e-9
+    sx, sy, sv = _sheet(1.5, 4.5, D + 0.4, 3)
+    xa, ya, va = np.concatenate([x, sx]), np.concatenate([y, sy]), np.concatenate([v, sv])
+    frac2 = waves.fraction_surface(xa, ya, va, g, kernel, h, DX, still=D)
+    wire2 = waves.wire_surface(xa, ya, va, g, kernel, h, DX, still=D)
+    assert np.max(np.abs(frac2 - 0.4 - 3 * DX)) <= 0.1 * DX         # the sheet's top
+    assert np.max(np.abs(wire2 - frac - 3 * DX)) <= 0.1 * DX
+    assert np.isnan(waves.wire_surface(x, y, v, [7.0], kernel, h, DX)[0])
+
+
 def test_fraction_surface_no_fluid_is_nan():
     x, y, v = columns(SURFACES["flat"], length=1.0)
     eta = waves.fraction_surface(x, y, v, [0.5, 3.0], CubicSpline(), 1.3 * DX, DX)

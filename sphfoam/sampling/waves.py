@@ -263,8 +263,8 @@ def fraction_surface_3d(x, y, z, vol, gauges, kernel, h, dx, *, still: float = 0
 # --- sub-particle surface: the SPH fluid fraction crosses 1/2 (issue 13) ------------------------
 #: a surface mode: ``particle`` (the thesis's highest particle, T §4.3.2) or ``fraction``
 SurfaceMode = Literal["particle", "fraction"]
-#: the gauges' modes (``waveGauges``, ``crestTracker``): those two or ``volume``
-GaugeSurfaceMode = Literal["particle", "fraction", "volume"]
+#: the gauges' modes (``waveGauges``, ``crestTracker``): those two, ``volume`` or ``wire``
+GaugeSurfaceMode = Literal["particle", "fraction", "volume", "wire"]
 
 
 @njit(cache=True)
@@ -421,6 +421,85 @@ def wall_run_up_3d(xf, yf, zf, wall_x, dx, *, wall_y=None, still=0.0, band=1.5) 
     return float(np.asarray(zf)[near].max()) + 0.5 * dx - still
 
 
+# --- the wire gauge: the wetted length of a vertical wire ---------------------------------------
+@njit(cache=True)
+def _wetted(cx, cy, cz, cv, gx, gy, z_bot, z_top, step, inv_h, w0, support, kernel_f, level):
+    """Up the vertical through (gx, gy) from z_bot to z_top: the lowest height where the fluid
+    fraction of the particles (cx, cy, cz, cv) reaches ``level`` and the total length of the
+    stretches where it is at least ``level`` (marched by ``step``, every crossing refined by
+    bisection). (NaN, 0) if the vertical is never wet."""
+    lowest = np.nan
+    wet_len = 0.0
+    a = z_bot
+    wet = _phi3(gx, gy, a, cx, cy, cz, cv, inv_h, w0, support, kernel_f) >= level
+    enter = a
+    if wet:
+        lowest = a
+    while a < z_top:
+        b = min(a + step, z_top)
+        now = _phi3(gx, gy, b, cx, cy, cz, cv, inv_h, w0, support, kernel_f) >= level
+        if now != wet:
+            lo, hi = a, b                           # phi crosses level in [lo, hi]
+            for _ in range(60):
+                m = 0.5 * (lo + hi)
+                if (_phi3(gx, gy, m, cx, cy, cz, cv, inv_h, w0, support, kernel_f)
+                        >= level) == wet:
+                    lo = m
+                else:
+                    hi = m
+                if hi - lo <= 1e-12 * step:
+                    break
+            z = 0.5 * (lo + hi)
+            if now:
+                enter = z
+                if lowest != lowest:
+                    lowest = z
+            else:
+                wet_len += z - enter
+            wet = now
+        a = b
+    if wet:
+        wet_len += z_top - enter
+    return lowest, wet_len
+
+
+def wire_surface_3d(x, y, z, vol, gauges, kernel, h, dx, *, still: float = 0.0,
+                    level: float = 0.5, dim: int = 3) -> np.ndarray:
+    """The free surface a wire wave gauge (resistance or capacitance) reads at the horizontal
+    points ``gauges``: the wire's wetted length, here the total length of the vertical through
+    (x_g, y_g) where the SPH fluid fraction sum_b V_b W(r - r_b) is at least 1/2, added to the
+    lowest wet height, minus ``still``. Where the water is one column it is the fraction
+    gauge's surface (:func:`fraction_surface_3d`); a sheet or drop passing above adds its
+    own thickness only, where the highest crossing would read its height. NaN with no fluid
+    within reach. ``dim`` 2: a 2-D case, (x, z) the plane's coordinates and y unused."""
+    x, y, z, vol = (np.asarray(a, dtype=float) for a in (x, y, z, vol))
+    g = np.atleast_2d(np.asarray(gauges, dtype=float))
+    out = np.full(len(g), np.nan)
+    reach = float(kernel.support) * h
+    w0 = (kernel.alpha(3) / h**3) if dim == 3 else (float(kernel.alpha_2d) / h**2)
+    for k, (gx, gy) in enumerate(g):
+        near = (x - gx) ** 2 + (y - gy) ** 2 < reach * reach
+        if not near.any():
+            continue
+        cx, cy, cz, cv = (np.ascontiguousarray(a[near]) for a in (x, y, z, vol))
+        lowest, length = _wetted(cx, cy, cz, cv, float(gx), float(gy),
+                                 float(cz.min()) - reach, float(cz.max()) + reach, 0.25 * dx,
+                                 1.0 / h, w0, float(kernel.support), kernel.f_jit,
+                                 float(level))
+        out[k] = lowest + length
+    return out - still
+
+
+def wire_surface(x, y, vol, gauges_x, kernel, h, dx, *, still: float = 0.0) -> np.ndarray:
+    """:func:`wire_surface_3d` of a 2-D case: the vertical x = x_g of the (x, y) plane."""
+    g = np.atleast_1d(np.asarray(gauges_x, dtype=float))
+    x = np.asarray(x, dtype=float)
+    if x.size == 0:
+        return np.full(g.size, np.nan)
+    return wire_surface_3d(x, np.zeros_like(x), y, vol, np.column_stack([g, np.zeros_like(g)]),
+                           kernel, h, dx, still=still, dim=2)
+
+
 def _fluid_volumes(st, f):
     return st.m[f] / st.rho[f]
 
@@ -470,7 +549,10 @@ class _GaugeSurfaceCoeffs(FunctionObjectCoeffs):
         "SPH fluid fraction sum_b V_b W(r - r_b) crosses 1/2 along the vertical, "
         "sub-particle (issue 13); `volume`: the bed plus the column's water volume per "
         "unit width, sum_b V_b G(x - x_b), whatever the arrangement of its particles, the "
-        "bed calibrated by `fraction` on the case's first time directory (issue 13)"))
+        "bed calibrated by `fraction` on the case's first time directory (issue 13), 2-D "
+        "only; `wire`: what a wire (resistance) gauge reads, the lowest wet height plus the "
+        "vertical's whole length where the fluid fraction is at least 1/2, so a sheet or "
+        "splash passing above adds its thickness, not its height"))
     volumeWidth: float = Field(1.0, gt=0, description=(
         "surface volume: standard deviation of the Gaussian window G, in dx"))
 
@@ -652,7 +734,9 @@ class WaveGauges(FunctionObject):
     subtracted. A gauge with fluid on one side only reads that particle; with none, NaN.
     With ``surface fraction`` the gauge is sub-particle instead: the highest y on the vertical
     where the SPH fluid fraction sum_b V_b W(r - r_b) reaches 1/2 (``fraction_surface``);
-    with ``surface volume`` it is the bed plus the column's water volume (``ColumnSurface``).
+    with ``surface volume`` it is the bed plus the column's water volume (``ColumnSurface``);
+    with ``surface wire`` it is what a wire gauge reads, the lowest wet height plus the
+    wetted length of the vertical (``wire_surface``: a splash above adds its thickness only).
 
     3-D (``points``, (x y) with z up): the same gauge on the horizontal plane
     (``surface_elevation_3d``): the highest fluid particle in each quadrant of the square
@@ -660,7 +744,8 @@ class WaveGauges(FunctionObject):
     tops evaluated at the gauge (the 2-D straight line, one dimension up; an extruded 2-D
     case reads as the 2-D gauge), + dx/2 - ``still``. ``surface fraction``: the highest z on
     the vertical through the gauge where the 3-D fluid fraction reaches 1/2
-    (``fraction_surface_3d``). ``surface volume`` has no 3-D form (refused).
+    (``fraction_surface_3d``); ``surface wire`` the wetted length of the vertical
+    (``wire_surface_3d``). ``surface volume`` has no 3-D form (refused).
 
     ``line`` adds a line of evenly spaced gauges (in 2-D from x = start to end, in 3-D from
     (x y) start to end), after those of ``x`` / ``points``. Columns: ``eta(x)`` in 2-D,
@@ -704,7 +789,8 @@ class WaveGauges(FunctionObject):
                 raise ValueError("a 3-D case's gauges are points ((x y) ...) on the "
                                  "horizontal plane, not x")
             if dim == 3 and self.surface == "volume":
-                raise ValueError("surface volume has no 3-D form: use particle or fraction")
+                raise ValueError("surface volume has no 3-D form: use particle, fraction "
+                                 "or wire")
             if not (self.x or self.points or self.line):
                 raise ValueError("give the gauges: x (2-D), points (3-D) or a line")
             return self
@@ -744,6 +830,10 @@ class WaveGauges(FunctionObject):
             eta = fraction_surface(st.x[f], st.y[f], _fluid_volumes(st, f), gx,
                                    self.case.models.sph["kernel"], self.ctx.h, self.ctx.dx,
                                    still=c.still)
+        elif c.surface == "wire":
+            eta = wire_surface(st.x[f], st.y[f], _fluid_volumes(st, f), gx,
+                               self.case.models.sph["kernel"], self.ctx.h, self.ctx.dx,
+                               still=c.still)
         else:
             eta = surface_elevation(st.x[f], st.y[f], gx, self.ctx.dx, still=c.still,
                                     window=c.window)
@@ -753,10 +843,10 @@ class WaveGauges(FunctionObject):
         c, g = self.coeffs, self.gauges()
         if not f.any():
             return np.full(len(g), np.nan)
-        if c.surface == "fraction":
-            return fraction_surface_3d(st.x[f], st.y[f], st.z[f], _fluid_volumes(st, f), g,
-                                       self.case.models.sph["kernel"], self.ctx.h,
-                                       self.ctx.dx, still=c.still)
+        if c.surface in ("fraction", "wire"):
+            read = fraction_surface_3d if c.surface == "fraction" else wire_surface_3d
+            return read(st.x[f], st.y[f], st.z[f], _fluid_volumes(st, f), g,
+                        self.case.models.sph["kernel"], self.ctx.h, self.ctx.dx, still=c.still)
         return surface_elevation_3d(st.x[f], st.y[f], st.z[f], g, self.ctx.dx,
                                     still=c.still, window=c.window)
 
@@ -1242,7 +1332,8 @@ class CrestTracker(FunctionObject):
     to ``celerity.dat`` (the thesis's average wave speed between two gauges, T Table 4.3,
     with every sample in between). ``surface fraction`` reads the gauges by the SPH fluid
     fraction 1/2 (sub-particle) instead of the highest particle, ``surface volume`` by the
-    column's water volume (``ColumnSurface``).
+    column's water volume (``ColumnSurface``), ``surface wire`` by the wetted length of the
+    vertical (``wire_surface``).
 
     3-D (z up): the gauges lie on the line y = ``y`` from ``xMin`` to ``xMax`` (the 3-D
     gauges, :func:`surface_elevation_3d` or :func:`fraction_surface_3d`); ``surface volume``
@@ -1284,7 +1375,8 @@ class CrestTracker(FunctionObject):
                 raise ValueError("a 3-D case's crest tracker reads gauges along x on one line: "
                                  "give its y")
             if dim == 3 and self.surface == "volume":
-                raise ValueError("surface volume has no 3-D form: use particle or fraction")
+                raise ValueError("surface volume has no 3-D form: use particle, fraction "
+                                 "or wire")
             if dim == 2 and self.y is not None:
                 raise ValueError("y is the gauges' line in a 3-D case: a 2-D case has none")
             return self
@@ -1305,9 +1397,10 @@ class CrestTracker(FunctionObject):
         gx = self._gauges(xf)
         if c.surface == "volume":
             eta = self.column.surface(xf, yf, vf, gx, still=c.still)
-        elif c.surface == "fraction":
-            eta = fraction_surface(xf, yf, vf, gx, self.case.models.sph["kernel"], self.ctx.h,
-                                   dx, still=c.still)
+        elif c.surface in ("fraction", "wire"):
+            read = fraction_surface if c.surface == "fraction" else wire_surface
+            eta = read(xf, yf, vf, gx, self.case.models.sph["kernel"], self.ctx.h, dx,
+                       still=c.still)
         else:
             eta = surface_elevation(xf, yf, gx, dx, still=c.still, window=c.window)
         return crest(gx, eta, c.fitAbove)
@@ -1327,10 +1420,10 @@ class CrestTracker(FunctionObject):
             return float("nan"), float("nan")
         gx = self._gauges(st.x[f])
         pts = np.column_stack([gx, np.full(gx.size, c.y)])
-        if c.surface == "fraction":
-            eta = fraction_surface_3d(st.x[f], st.y[f], st.z[f], _fluid_volumes(st, f), pts,
-                                      self.case.models.sph["kernel"], self.ctx.h, dx,
-                                      still=c.still)
+        if c.surface in ("fraction", "wire"):
+            read = fraction_surface_3d if c.surface == "fraction" else wire_surface_3d
+            eta = read(st.x[f], st.y[f], st.z[f], _fluid_volumes(st, f), pts,
+                       self.case.models.sph["kernel"], self.ctx.h, dx, still=c.still)
         else:
             eta = surface_elevation_3d(st.x[f], st.y[f], st.z[f], pts, dx, still=c.still,
                                        window=c.window)
