@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from sphfoam.case.case import SPH_PROPERTIES, Case
 from sphfoam.case.errors import CaseError
-from sphfoam.case.geometry import default_domain, segments_of
+from sphfoam.case.geometry import default_domain, planes_of, segments_of
 from sphfoam.case.schemas import SPH_FAMILIES
 from sphfoam.engine.build import build_pipeline
 from sphfoam.engine.plan import Selection
@@ -50,7 +50,8 @@ def _stepping(case: Case, sel: Selection, lo, hi) -> dict:
     """What every backend's simulation takes from the case besides the state, the pipeline
     and the integrator: walls, motions, domain and the time-step controls."""
     c, ctx = case.control, case.context
-    return dict(segments=segments_of(case.particles), motions=case.models.motions,
+    return dict(segments=segments_of(case.particles), planes=planes_of(case.particles),
+                motions=case.models.motions,
                 domain_lo=lo, domain_hi=hi, beta=c.maxCo,
                 force_condition=case.schemes.timeStepControl.forceCondition,
                 adjust_time_step=c.adjustTimeStep, delta_t=c.deltaT, max_delta_t=c.maxDeltaT,

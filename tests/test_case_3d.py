@@ -65,14 +65,16 @@ def test_the_3d_tutorial_case_validates_and_sets_up_in_three_dimensions(tmp_path
     assert np.allclose(st.m[fluid], st.rho[fluid] * 0.02 ** 3)
 
 
-@pytest.mark.parametrize("boundary", ["stationaryGhosts", "adami"])
+@pytest.mark.parametrize("boundary", ["stationaryGhosts", "adami",
+                                      "mirrorGhosts; pressure hydrostatic"])
 def test_a_3d_tank_run_stays_hydrostatic_and_writes_3d_time_directories(tmp_path, boundary):
     """hydrostaticTank3D at H/dx = 10 for 0.05 s through sphfoam.run, with DualSPHysics'
-    stationary ghosts and with Adami's generalised wall (no slip, AHA12 eqs. (22), (27) over
-    the 3-D neighbours): the bed pressure (the line through the column's pressure, as
-    bedPressure.py) within 2 % of rho g H, the water at rest, the time directories 3-D
-    vectors read back bit for bit; Adami's wall particles keep their prescribed (zero)
-    velocity in the written fields."""
+    stationary ghosts, with Adami's generalised wall (no slip, AHA12 eqs. (22), (27) over
+    the 3-D neighbours) and with mirrored ghosts across the tank's faces (edge and vertex
+    ghosts, hydrostatic ghost pressure): the bed pressure (the line through the column's
+    pressure, as bedPressure.py) within 2 % of rho g H, the water at rest, the time
+    directories 3-D vectors read back bit for bit; Adami's wall particles keep their
+    prescribed (zero) velocity in the written fields."""
     case = _copy(tmp_path)
     if boundary != "stationaryGhosts":
         _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
@@ -112,11 +114,23 @@ def test_a_3d_case_refuses_what_has_no_3d_form_by_name(tmp_path):
     with pytest.raises(CaseError, match=r"fluid.w.*a polygon is two-dimensional: a 3-D case "
                                         r"uses box, cylinder, extrude or mesh"):
         Case(case).validate()
-    case = _copy(tmp_path, "d")
+    case = _copy(tmp_path, "d")               # mirrored ghosts: no wall law in 3-D
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
+          "type mirrorGhosts; wallLaw smooth;")
+    with pytest.raises(CaseError, match=r"boundary.type: boundary 'mirrorGhosts': wallLaw "
+                                        r"smooth has no 3-D form"):
+        Case(case).validate()
+    case = _copy(tmp_path, "d2")              # ... and box tanks' faces only
     _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
           "type mirrorGhosts;")
-    with pytest.raises(CaseError, match=r"boundary.type: boundary 'mirrorGhosts' has no 3-D"):
-        Case(case).validate()
+    _particle_dict(case, "dimension 3; dx 0.05;\n"
+                   "fluid { w { type box; min (0 0 0); max (0.4 0.4 0.2); } }\n"
+                   "walls { tank { type box; min (0 0 0); max (0.4 0.4 0.4); }\n"
+                   "        post { type cylinder; point1 (0.2 0.2 0); point2 (0.2 0.2 0.3); "
+                   "radius 0.05; } }\n")
+    with pytest.raises(CaseError, match=r"walls.post.type: mirrorGhosts in 3-D mirrors across "
+                                        r"the plane faces of box tanks only, not a cylinder"):
+        sphfoam.setup_case(case)
     case = _copy(tmp_path, "e")                 # Adami's free slip reads 2-D wall normals
     _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;",
           "type adami; noSlip no;")
@@ -137,6 +151,49 @@ def test_a_3d_case_refuses_what_has_no_3d_form_by_name(tmp_path):
                                         r"normals, which the 3-D set-up writes for box and "
                                         r"block walls only"):
         generate_case(Case(case))
+
+
+def test_3d_mirror_ghosts_of_a_particle_by_a_vertex_of_the_tank():
+    """A particle near the floor, the left and the front face of a box tank gets seven
+    ghosts (three faces, three edges, the vertex) at the reflected positions, T(3.77) once,
+    twice and three times; free slip reverses the normal components only, no slip every
+    component about the faces' mean velocity (zero here); the hydrostatic ghost pressure
+    p_G = p_a + rho_a g.(x_G - x_a). A particle near the floor only gets one; one above the
+    tank's open top, none."""
+    from sphfoam.case.geometry import Plane
+    from sphfoam.models import mirror3d as m3
+
+    faces = [Plane(2, 0.0, 1.0, (0.0, 1.0, 0.0, 1.0), (0.0, 0.0, 0.0), 0),   # floor z = 0
+             Plane(0, 0.0, 1.0, (0.0, 1.0, 0.0, 1.0), (0.0, 0.0, 0.0), 0),   # left x = 0
+             Plane(1, 0.0, 1.0, (0.0, 1.0, 0.0, 1.0), (0.0, 0.0, 0.0), 0)]   # front y = 0
+    pl = m3.plane_array(faces)
+    x, y, z = (np.array(v) for v in ([0.03, 0.5, 0.03], [0.02, 0.5, 0.5], [0.01, 0.04, 1.2]))
+    kind = np.zeros(3, dtype=np.int64)
+    count = np.zeros(3, dtype=np.int64)
+    m3.count_ghosts(x, y, z, kind, pl, 0.1, count)
+    assert count.tolist() == [7, 1, 0]
+    offset = np.array([0, 7, 8])
+    src, f1, f2, f3 = (np.full(8, -9, dtype=np.int64) for _ in range(4))
+    m3.fill_ghosts(x, y, z, kind, pl, 0.1, offset, src, f1, f2, f3)
+    assert src.tolist() == [0] * 7 + [1]
+    sets = {tuple(sorted(f for f in (a, b, c) if f >= 0)) for a, b, c in zip(f1, f2, f3)}
+    assert sets == {(0,), (1,), (2,), (0, 1), (0, 2), (1, 2), (0, 1, 2)}
+    u, v, w = np.array([1.0, 0, 0]), np.array([2.0, 0, 0]), np.array([3.0, 0, 0])
+    rho0, B, gamma = 1000.0, 1e5, 7.0
+    for j in range(7):
+        on = [f for f in (f1[j], f2[j], f3[j]) if f >= 0]
+        axes = {int(pl[f, 0]) for f in on}
+        want = [(-c if k in axes else c) for k, c in enumerate((0.03, 0.02, 0.01))]
+        for no_slip in (False, True):
+            gx_, gy_, gz_, gu, gv, gw, grho = m3.ghost_state(
+                0.03, 0.02, 0.01, 1.0, 2.0, 3.0, 1001.0, pl, f1[j], f2[j], f3[j], no_slip,
+                True, 0.0, 0.0, -9.81, rho0, B, gamma)
+            assert np.allclose((gx_, gy_, gz_), want, rtol=0, atol=1e-15)
+            vel = [(-c if (no_slip or k in axes) else c) for k, c in enumerate((1, 2, 3))]
+            assert (gu, gv, gw) == tuple(float(c) for c in vel)
+            pa = B * ((1001.0 / rho0) ** gamma - 1.0)
+            pg = pa + 1001.0 * -9.81 * (gz_ - 0.01)
+            assert B * ((grho / rho0) ** gamma - 1.0) == pytest.approx(pg, rel=1e-12)
 
 
 def test_2d_cases_refuse_3d_shapes_and_keep_two_components(tmp_path):
@@ -184,7 +241,8 @@ walls
     assert fluid.sum() < 40 * 20 * 15
 
 
-@pytest.mark.parametrize("boundary", ["stationaryGhosts", "repulsiveMonaghanKos", "hybrid"])
+@pytest.mark.parametrize("boundary", ["stationaryGhosts", "repulsiveMonaghanKos", "hybrid",
+                                      "mirrorGhosts"])
 def test_an_extruded_dam_break_periodic_across_stays_uniform_and_matches_2d(tmp_path,
                                                                            boundary):
     """A 2-D dam break and the same case extruded 12 dx across (three cells), periodic in y: after 0.1 s
@@ -193,7 +251,8 @@ def test_an_extruded_dam_break_periodic_across_stays_uniform_and_matches_2d(tmp_
     kernels differ: 2-D and 3-D SPH agree to a discretisation error, not to round-off).
     With DualSPHysics' stationary ghosts, the repulsive wall of Monaghan & Kos and T's
     hybrid wall (the 3-D forms of the last two: their faces' lattices, sphfoam.models.
-    boundaries)."""
+    boundaries), and mirrored ghosts (across the tank's faces, with edge ghosts:
+    sphfoam.models.mirror3d)."""
     dx = 0.02
     runs = {}
     for dim in (2, 3):

@@ -258,6 +258,12 @@ def test_a_model_with_no_device_form_is_refused_by_name(tutorial, monkeypatch):
     sel = selection(Case(tutorial("damBreak", {
         "constant/sphProperties:boundary": {"type": "adami"}})))
     check_supported(sel)
+    # mirrored ghosts in 3-D: the device form mirrors across 2-D segments only
+    sel3 = selection(Case(tutorial("hydrostaticTank3D", {
+        "constant/sphProperties:boundary": {"type": "mirrorGhosts"}})))
+    with pytest.raises(Unsupported, match=r"boundary 'mirrorGhosts': its device form has no "
+                       r"3-D form"):
+        check_supported(sel3)
     monkeypatch.setattr(Adami, "device_forms", lambda self: ())
     with pytest.raises(Unsupported, match=r"boundary 'adami': its run-time hooks \(attach, "
                        r"before_evaluation, walls_moved, after_step\)"):

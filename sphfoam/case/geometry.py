@@ -87,6 +87,43 @@ def polylines_of(region) -> list[tuple[list[tuple[float, float]], str]]:
     return [([tuple(p) for p in region.points], region.side)]
 
 
+@dataclass(frozen=True)
+class Plane:
+    """A plane face of a 3-D ``box`` tank: the plane x_k = ``position`` (k = ``axis``) with
+    the fluid on the side of ``sign`` (its normal into the fluid is sign e_k), bounded by
+    ``extent`` (lo, hi along axis k+1, lo, hi along axis k+2, mod 3)."""
+
+    axis: int
+    position: float
+    sign: float
+    extent: tuple[float, float, float, float]
+    velocity: tuple[float, float, float]
+    patch: int
+
+
+def planes_of(pd: ParticleDict) -> list[Plane]:
+    """The closed faces of a 3-D case's ``box`` tanks as planes (the walls mirrored ghosts
+    reflect across in 3-D); none in 2-D. Other 3-D walls have no plane form: a boundary
+    that needs one refuses them (``sphfoam.setup.particles3d``)."""
+    from sphfoam.case.solids import FACE_AXES
+
+    out: list[Plane] = []
+    if pd.dimension != 3:
+        return out
+    for patch, w in enumerate(pd.walls.values()):
+        if not isinstance(w, BoxWalls):
+            continue
+        lo, hi = [float(v) for v in w.min], [float(v) for v in w.max]
+        vel = tuple(float(v) for v in (tuple(w.velocity) + (0.0, 0.0, 0.0))[:3])
+        for face, (k, side) in FACE_AXES.items():
+            if face in w.open:
+                continue
+            k1, k2 = (k + 1) % 3, (k + 2) % 3
+            out.append(Plane(k, hi[k] if side else lo[k], -1.0 if side else 1.0,
+                             (lo[k1], hi[k1], lo[k2], hi[k2]), vel, patch))
+    return out
+
+
 def segments_of(pd: ParticleDict) -> list[Segment]:
     """All wall segments of a 2-D case, normals into the fluid (none in 3-D: its walls are
     layers of particles, sphfoam.case.solids)."""

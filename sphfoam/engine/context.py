@@ -75,6 +75,11 @@ class RunContext:
         return self._sim.segments
 
     @property
+    def planes(self):
+        """The plane faces of a 3-D case's box tanks (``sphfoam.case.geometry.Plane``)."""
+        return getattr(self._sim, "planes", ())
+
+    @property
     def selection(self):
         """The models the case selects (``sphfoam.engine.plan.Selection``)."""
         return self._sim.pipeline.selection

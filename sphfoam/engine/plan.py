@@ -127,7 +127,12 @@ def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0, 0.0),
 
 def missing_dimension(model, dim: int) -> str | None:
     """Why ``model`` cannot run in ``dim`` dimensions, naming it (None when it can): a term
-    with no code for ``dim``, or run-time hooks written for two dimensions only."""
+    with no code for ``dim``, run-time hooks written for two dimensions only, or an option
+    the model has no ``dim``-D form of (its ``dimension_problem``)."""
+    problem = getattr(model, "dimension_problem", None)
+    why = problem(dim) if problem is not None else None
+    if why:
+        return f"{model.family} {model.name!r}: {why}"
     for t in model.terms():
         if dim not in t.dims:
             return (f"{model.family} {model.name!r} has no {dim}-D form (term {t.name!r} has "

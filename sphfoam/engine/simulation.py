@@ -77,7 +77,7 @@ class Simulation:
     def __init__(self, state: ParticleState, pipeline, integrator, *, domain_lo, domain_hi,
                  beta: float, force_condition: bool, adjust_time_step: bool, delta_t: float,
                  max_delta_t: float = math.inf, cell_size_factor: float = 1.05,
-                 dt_limit: float = math.inf, segments=(), motions=None,
+                 dt_limit: float = math.inf, segments=(), planes=(), motions=None,
                  h: float | None = None, support: float | None = None,
                  filter_every: int | None = None):
         self.state = state
@@ -159,6 +159,8 @@ class Simulation:
         #: prescribed motions by wall-entry index (sphfoam.models.motion)
         self.motions = dict(motions or {})
         self.segments = list(segments)
+        #: the plane faces of a 3-D case's box tanks (sphfoam.case.geometry.Plane)
+        self.planes = list(planes)
         self._hooks = {name: sel.hooks(name) for name in
                        ("before_neighbours", "add_particles", "after_sort",
                         "before_evaluation", "after_rates", "after_density_rate",

@@ -133,12 +133,16 @@ class ParticleState:
             self.extra[name] = np.ascontiguousarray(self.extra[name][mask])
         self._alloc_scratch()
 
-    def append(self, x, y, u, v, rho, m, kind, id):
-        """Add particles at the end (extra fields get zeros); two dimensions."""
-        if self.dim != 2:
-            raise ValueError("append: a two-dimensional state only")
+    def append(self, x, y, u, v, rho, m, kind, id, z=None, w=None):
+        """Add particles at the end (extra fields get zeros); a 3-D state also takes their
+        ``z`` and ``w``."""
+        if (self.dim == 3) != (z is not None and w is not None):
+            raise ValueError(f"append: a {self.dim}-D state takes "
+                             f"{'z and w' if self.dim == 3 else 'no z, w'}")
         k = len(x)
-        for name, new in zip(PERSISTENT_F8 + PERSISTENT_I8, (x, y, u, v, rho, m, kind, id)):
+        given = dict(x=x, y=y, z=z, u=u, v=v, w=w, rho=rho, m=m, kind=kind, id=id)
+        for name in self.persistent_f8 + PERSISTENT_I8:
+            new = given[name]
             old = getattr(self, name)
             setattr(self, name, np.ascontiguousarray(np.concatenate(
                 [old, np.asarray(new, dtype=old.dtype)])))

@@ -43,6 +43,7 @@ from pydantic import Field, model_validator
 from sphfoam.engine.state import GHOST, kept_arrays
 from sphfoam.engine.terms import Term, collect
 from sphfoam.models import mirror as gh
+from sphfoam.models import mirror3d as m3
 from sphfoam.models import walllaw as wl
 from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
@@ -259,15 +260,23 @@ class MirrorGhosts(Boundary):
     compressed; ``wallLaw`` adds the shear stress of the law of the wall (T(3.84)-(3.85), or
     a prescribed U+) to a free-slip wall, as a boundary integral over the wall line (see
     ``after_rates``).
+
+    In 3-D the walls are the closed faces of ``box`` tanks (planes, ``sphfoam.case.geometry.
+    planes_of``), with edge and vertex ghosts (``sphfoam.models.mirror3d``); other wall
+    shapes and ``wallLaw`` are refused there by name.
     """
 
     name = "mirrorGhosts"
     doc = ("fluid mirrored across straight walls each step, T(3.77)-(3.80); free- or no-slip; "
            "pressure hydrostatic: p_G = p_a + rho_a g.(x_G - x_a); wallLaw: the law of the "
-           "wall's shear stress T(3.84)-(3.85) on a free-slip wall")
+           "wall's shear stress T(3.84)-(3.85) on a free-slip wall; 3-D: across the faces "
+           "of box tanks, with edge and vertex ghosts")
     wall_placement = "none"
     massless_ghosts = True
+    hook_dims = (2, 3)
     device_form = "sphfoam.models.mirror_cuda:MirrorGhostsDevice"
+    #: the device form mirrors across 2-D segments only
+    device_dims = (2,)
     device_hooks = ("attach", "before_neighbours", "add_particles", "keeps_neighbours",
                     "after_sort", "before_evaluation", "after_rates", "walls_moved",
                     "after_step", "summary")
@@ -287,6 +296,13 @@ class MirrorGhosts(Boundary):
                                  "wall: set noSlip no (a no-slip ghost already imposes the "
                                  "viscous stress of zero wall velocity)")
             return self
+
+    def dimension_problem(self, dim: int) -> str | None:
+        """In 3-D the wall law is refused: its stress integrates the kernel along a line."""
+        if dim == 3 and self.coeffs.wallLaw != "none":
+            return (f"wallLaw {self.coeffs.wallLaw} has no 3-D form (its wall stress "
+                    "integrates the kernel along a wall line): use wallLaw none in 3-D")
+        return None
 
     def neighbour_kinds(self):
         """Ghosts are every non-fluid neighbour; they enter every term as fluid."""
@@ -333,6 +349,9 @@ class MirrorGhosts(Boundary):
     # (``Term.weighted``; the generated maximum of T(3.89) skips massless neighbours, and no
     # term of the registry that sees ghosts is unweighted).
     def attach(self, run):
+        self.three = run.selection.dim == 3
+        if self.three:
+            return self._attach_3d(run)
         if not run.segments:
             raise ValueError("mirrorGhosts needs walls in system/particleDict")
         self.reach = run.support_radius
@@ -366,6 +385,83 @@ class MirrorGhosts(Boundary):
         self.unweighted = [t.who() for t in collect(run.selection.models())
                            if not t.weighted and set(t.sees) & {"ghost", "all"}]
 
+    # --- three dimensions: the faces of box tanks (sphfoam.models.mirror3d) ----------------
+    def _attach_3d(self, run):
+        c = self.coeffs
+        if not run.planes:
+            raise ValueError("mirrorGhosts in 3-D needs a box tank with a closed face in "
+                             "system/particleDict")
+        self.reach = run.support_radius
+        self.build_reach = max(run.cells.cell_size, self.reach)
+        self.margin = self.build_reach - self.reach
+        self.planes = list(run.planes)
+        self.pl = m3.plane_array(self.planes)
+        self._ghost = None
+        self._active = None
+        self.pushed_back = 0
+        self._shear = None
+        prm = run.coefficients()
+        self._hydro = (False, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+        if c.pressure == "hydrostatic":
+            if "eos_B" not in prm:
+                raise ValueError("mirrorGhosts pressure hydrostatic needs the tait equation "
+                                 "of state")
+            self._hydro = (True, prm["gx"], prm["gy"], prm["gz"], prm["eos_rho0"],
+                           prm["eos_B"], prm["eos_gamma"])
+        self.unweighted = [t.who() for t in collect(run.selection.models())
+                           if not t.weighted and set(t.sees) & {"ghost", "all"}]
+
+    def _add_particles_3d(self, run):
+        st = run.state
+        count = np.zeros(st.n, dtype=np.int64)
+        m3.count_ghosts(st.x, st.y, st.z, st.kind, self.pl, self.build_reach, count,
+                        self.margin)
+        offset = np.zeros(st.n, dtype=np.int64)
+        np.cumsum(count[:-1], out=offset[1:])
+        ng = int(count.sum())
+        src, f1, f2, f3 = (np.empty(ng, dtype=np.int64) for _ in range(4))
+        m3.fill_ghosts(st.x, st.y, st.z, st.kind, self.pl, self.build_reach, offset, src,
+                       f1, f2, f3, self.margin)
+        n0 = st.n
+        zero = np.zeros(ng)
+        st.append(zero, zero, zero, zero, zero, zero, np.full(ng, GHOST), -1 - st.id[src],
+                  z=zero, w=zero)
+        gidx = np.arange(n0, n0 + ng)
+        active = np.ones(ng, dtype=np.bool_)
+        m3.refresh_ghosts(st.x, st.y, st.z, st.u, st.v, st.w, st.rho, st.m, gidx, src, f1,
+                          f2, f3, self.pl, self.coeffs.noSlip, active, *self._hydro)
+        gcell, gout = run.cells.bin(st.x[n0:], st.y[n0:], st.z[n0:])
+        if gout:
+            keep = np.concatenate([np.ones(n0, dtype=bool), gcell >= 0])
+            st.keep(keep)
+            kg = gcell >= 0
+            gcell = gcell[kg]
+            gidx = np.arange(n0, n0 + int(kg.sum()))
+            src, f1, f2, f3 = src[kg], f1[kg], f2[kg], f3[kg]
+        self._active = np.empty(src.shape[0], dtype=np.bool_)
+        m3.ghost_activity(st.x, st.y, st.z, src, f1, f2, f3, self.pl, self.reach,
+                          self._active)
+        self._ghost = (gidx, src, f1, f2, f3)
+        self.before_evaluation(run)
+        return gcell
+
+    def _keeps_neighbours_3d(self, run) -> bool:
+        st = run.state
+        gidx, src, f1, f2, f3 = self._ghost
+        n_on = m3.ghost_activity(st.x, st.y, st.z, src, f1, f2, f3, self.pl, self.reach,
+                                 self._active)
+        count = kept_arrays(self, "_count", 1, st.n, np.int64)[0]
+        m3.count_ghosts(st.x, st.y, st.z, st.kind, self.pl, self.reach, count)
+        if int(count.sum()) != n_on:
+            return False
+        self.before_evaluation(run)
+        if not self.unweighted:
+            return True
+        nb_start, nb_idx = run.neighbours
+        return not m3.dormant_ghost_near_fluid(st.x, st.y, st.z, st.kind, gidx, self._active,
+                                               nb_start, nb_idx,
+                                               self.reach ** 2 * (1.0 + 1e-12))
+
     def before_neighbours(self, run):
         st = run.state
         if (st.kind == GHOST).any():
@@ -375,6 +471,8 @@ class MirrorGhosts(Boundary):
     def add_particles(self, run, cell):
         """Mirror every fluid particle near a wall across it (T(3.77)); ghosts that fall
         outside the cell grid are dropped (their particle is at the edge)."""
+        if self.three:
+            return self._add_particles_3d(run)
         st = run.state
         count = np.zeros(st.n, dtype=np.int64)
         gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.build_reach, count,
@@ -410,8 +508,8 @@ class MirrorGhosts(Boundary):
     def after_sort(self, run, order):
         inv = np.empty_like(order)
         inv[order] = np.arange(order.size)
-        gidx, src, s1, s2 = self._ghost
-        self._ghost = (inv[gidx], inv[src], s1, s2)
+        gidx, src, *faces = self._ghost
+        self._ghost = (inv[gidx], inv[src], *faces)
 
     def keeps_neighbours(self, run) -> bool:
         """Whether the ghosts of the last build still serve this step (see above): the
@@ -419,6 +517,8 @@ class MirrorGhosts(Boundary):
         the support of a fluid particle. Sets which ghosts are active for this step."""
         if self._ghost is None:
             return False
+        if self.three:
+            return self._keeps_neighbours_3d(run)
         st = run.state
         gidx, src, s1, s2 = self._ghost
         n_on = gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
@@ -435,19 +535,32 @@ class MirrorGhosts(Boundary):
                                                self.reach ** 2 * (1.0 + 1e-12))
 
     def before_evaluation(self, run):
-        if self._ghost is not None:
+        if self._ghost is not None and self.three:
+            st = run.state
+            gidx, src, f1, f2, f3 = self._ghost
+            m3.refresh_ghosts(st.x, st.y, st.z, st.u, st.v, st.w, st.rho, st.m, gidx, src,
+                              f1, f2, f3, self.pl, self.coeffs.noSlip, self._active,
+                              *self._hydro)
+        elif self._ghost is not None:
             st = run.state
             gidx, src, s1, s2 = self._ghost
             gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
                               self.seg, self.coeffs.noSlip, self._active, *self._hydro)
 
     def walls_moved(self, run, offsets, velocities):
+        if self.three:
+            self.pl = m3.plane_array(self.planes, offsets, velocities)
+            return
         self.seg = gh.segment_array(run.segments, offsets, velocities)
 
     def after_step(self, run):
         """A particle that crossed a mirror wall during the step goes back before anything
         (a write, a function object, the next step) sees it."""
         st = run.state
+        if self.three:
+            self.pushed_back += m3.push_back(st.x, st.y, st.z, st.u, st.v, st.w, st.kind,
+                                             self.pl, self.reach)
+            return
         self.pushed_back += gh.push_back(st.x, st.y, st.u, st.v, st.kind, self.seg,
                                          self.reach)
 

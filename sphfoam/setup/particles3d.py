@@ -128,9 +128,16 @@ GEOMETRY_FIELDS = ("nx", "ny", "nz", "corner", "nFull")
 def _refuse(boundary, fields, walls=()) -> None:
     """What the 3-D set-up cannot make, refused by name."""
     if getattr(boundary, "wall_placement", "rows") == "none":
-        raise CaseError.single("constant/sphProperties", "boundary.type", (
-            f"{boundary.name} has no 3-D form (its walls are lines to mirror across): use "
-            "stationaryGhosts"))
+        if 3 not in getattr(boundary, "hook_dims", (2,)):
+            raise CaseError.single("constant/sphProperties", "boundary.type", (
+                f"{boundary.name} has no 3-D form (its walls are lines to mirror across): "
+                "use stationaryGhosts"))
+        for name, w in walls:
+            if not isinstance(w, BoxWalls):
+                raise CaseError.single(PD, f"walls.{name}.type", (
+                    f"{boundary.name} in 3-D mirrors across the plane faces of box tanks "
+                    f"only, not a {w.type}: use stationaryGhosts or adami"))
+        return
     wanted = set(getattr(boundary, "wall_fields", ())) | set(fields)
     lacking = wanted - {"wallDist"} - set(GEOMETRY_FIELDS)
     if lacking:
@@ -241,7 +248,7 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
     pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
     walls = list(pd.walls.values())
     layers = getattr(boundary, "wall_layers", None)
-    if walls:
+    if walls and getattr(boundary, "wall_placement", "rows") != "none":
         made = [wall_points(w if layers is None else w.model_copy(update={"layers": layers}),
                             dx, anchor) for w in walls]
         pw = np.concatenate([m[0] for m in made])

@@ -38,6 +38,10 @@ def refusals(sel: Selection, motions=None) -> list[str]:
         if why is not None:
             out.append(why)
             continue
+        if getattr(m, "device_form", "") and sel.dim not in getattr(m, "device_dims",
+                                                                    (2, 3)):
+            out.append(f"{m.family} {m.name!r}: its device form has no {sel.dim}-D form")
+            continue
         covered = covered_hooks(m)
         hooks = [h for h in uncovered(m, _HOOKS) if h not in covered]
         if hooks:

@@ -130,7 +130,7 @@ class CudaSimulation:
     def __init__(self, state: ParticleState, pipeline, integrator, *, domain_lo, domain_hi,
                  beta: float, force_condition: bool, adjust_time_step: bool, delta_t: float,
                  max_delta_t: float = math.inf, cell_size_factor: float = 1.05,
-                 dt_limit: float = math.inf, segments=(), motions=None):
+                 dt_limit: float = math.inf, segments=(), planes=(), motions=None):
         from sphfoam.engine.cuda import device as D
 
         self.cuda = cuda_module()
@@ -171,6 +171,7 @@ class CudaSimulation:
         self.removals = []
         self.on_removal = None
         self.segments = list(segments)
+        self.planes = list(planes)
         self.motions = dict(motions or {})
         self.list_built = 0
         self.list_reused = 0
