@@ -486,7 +486,8 @@ def test_fraction_run_up_on_the_wall():
 
 def test_fraction_mode_in_the_objects(tmp_path):
     """waveGauges, crestTracker and runUp with ``surface fraction``; the default stays the
-    thesis's particle gauge."""
+    thesis's particle gauge. On this single column ``surface wire`` reads what the fraction
+    gauge reads, in waveGauges and crestTracker."""
     case, ctx = fake_case(tmp_path)
     assert build("type waveGauges; x (1);").coeffs.surface == "particle"
     with pytest.raises(Exception, match="fraction"):
@@ -509,6 +510,15 @@ def test_fraction_mode_in_the_objects(tmp_path):
     ru.start(case, ctx, "0")
     assert ru.measure(sim.state.x, sim.state.y, v) == pytest.approx(
         eta_sech2(20.0, x0), abs=0.1 * DX)
+    fw = build("type waveGauges; x (5 9.5 10 12.25); still 1; surface wire;")
+    fw.start(case, ctx, "0")                   # surface wire: the same on one column
+    fw.execute(sim)
+    fw.end()
+    _, _, wire = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    np.testing.assert_allclose(wire[-1, 1:], data[0, 1:], rtol=0, atol=1e-9)
+    cw = build("type crestTracker; xMin 2; xMax 18; still 1; surface wire;")
+    cw.start(case, ctx, "0")
+    assert cw.measure(sim.state.x, sim.state.y, v) == pytest.approx((xc, ec), abs=1e-9)
 
 
 # --- surface volume: the column's water volume (issue 13) ----------------------------------------
