@@ -350,34 +350,42 @@ class MirrorGhosts(Boundary):
     # term of the registry that sees ghosts is unweighted).
     def attach(self, run):
         self.three = run.selection.dim == 3
-        if self.three:
-            return self._attach_3d(run)
-        if not run.segments:
+        if self.three and not run.planes:
+            raise ValueError("mirrorGhosts in 3-D needs a box tank with a closed face in "
+                             "system/particleDict")
+        if not self.three and not run.segments:
             raise ValueError("mirrorGhosts needs walls in system/particleDict")
         self.reach = run.support_radius
         #: ghosts are made within the list radius, for particles projecting within the skin
         self.build_reach = max(run.cells.cell_size, self.reach)
         self.margin = self.build_reach - self.reach
-        self.seg = gh.segment_array(run.segments)
-        self.corners = gh.corner_pairs(run.segments, 1e-9 * max(1.0, self.reach))
+        if self.three:
+            #: the closed faces of the box tanks (sphfoam.models.mirror3d)
+            self.planes = list(run.planes)
+            self.pl = m3.plane_array(self.planes)
+        else:
+            self.seg = gh.segment_array(run.segments)
+            self.corners = gh.corner_pairs(run.segments, 1e-9 * max(1.0, self.reach))
         self._ghost = None
         self._active = None
         self.pushed_back = 0
         c = self.coeffs
         prm = run.coefficients()
         #: (Phi table, law, its coefficient) of :func:`sphfoam.models.mirror.wall_shear`
+        #: (2-D: ``dimension_problem`` refuses a wall law in 3-D)
         self._shear = None
         if c.wallLaw != "none":
             coef = {"smooth": prm.get("bnd_wlnu"), "rough": c.ks,
                     "prescribedUPlus": c.UPlus}[c.wallLaw]
             self._shear = (gh.line_kernel(run.selection.kernel.W, run.h, self.reach),
                            gh.WALL_SHEAR_LAWS[c.wallLaw], float(coef))
-        self._hydro = (False, 0.0, 0.0, 1.0, 1.0, 1.0)
+        g = ("gx", "gy", "gz") if self.three else ("gx", "gy")
+        self._hydro = (False, *(0.0 for _ in g), 1.0, 1.0, 1.0)
         if c.pressure == "hydrostatic":
             if "eos_B" not in prm:
                 raise ValueError("mirrorGhosts pressure hydrostatic needs the tait equation "
                                  "of state")
-            self._hydro = (True, prm["gx"], prm["gy"], prm["eos_rho0"], prm["eos_B"],
+            self._hydro = (True, *(prm[k] for k in g), prm["eos_rho0"], prm["eos_B"],
                            prm["eos_gamma"])
         #: the selected terms that see ghosts and add what a massless neighbour does not
         #: cancel (Term.weighted False): only for them must a dormant ghost stay out of the
@@ -385,82 +393,50 @@ class MirrorGhosts(Boundary):
         self.unweighted = [t.who() for t in collect(run.selection.models())
                            if not t.weighted and set(t.sees) & {"ghost", "all"}]
 
-    # --- three dimensions: the faces of box tanks (sphfoam.models.mirror3d) ----------------
-    def _attach_3d(self, run):
-        c = self.coeffs
-        if not run.planes:
-            raise ValueError("mirrorGhosts in 3-D needs a box tank with a closed face in "
-                             "system/particleDict")
-        self.reach = run.support_radius
-        self.build_reach = max(run.cells.cell_size, self.reach)
-        self.margin = self.build_reach - self.reach
-        self.planes = list(run.planes)
-        self.pl = m3.plane_array(self.planes)
-        self._ghost = None
-        self._active = None
-        self.pushed_back = 0
-        self._shear = None
-        prm = run.coefficients()
-        self._hydro = (False, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
-        if c.pressure == "hydrostatic":
-            if "eos_B" not in prm:
-                raise ValueError("mirrorGhosts pressure hydrostatic needs the tait equation "
-                                 "of state")
-            self._hydro = (True, prm["gx"], prm["gy"], prm["gz"], prm["eos_rho0"],
-                           prm["eos_B"], prm["eos_gamma"])
-        self.unweighted = [t.who() for t in collect(run.selection.models())
-                           if not t.weighted and set(t.sees) & {"ghost", "all"}]
+    # --- the walls' geometry: 2-D segments (models.mirror), 3-D planes (models.mirror3d) ----
+    def _positions(self, st) -> tuple:
+        return (st.x, st.y, st.z) if self.three else (st.x, st.y)
 
-    def _add_particles_3d(self, run):
-        st = run.state
-        count = np.zeros(st.n, dtype=np.int64)
-        m3.count_ghosts(st.x, st.y, st.z, st.kind, self.pl, self.build_reach, count,
-                        self.margin)
-        offset = np.zeros(st.n, dtype=np.int64)
-        np.cumsum(count[:-1], out=offset[1:])
-        ng = int(count.sum())
-        src, f1, f2, f3 = (np.empty(ng, dtype=np.int64) for _ in range(4))
-        m3.fill_ghosts(st.x, st.y, st.z, st.kind, self.pl, self.build_reach, offset, src,
-                       f1, f2, f3, self.margin)
-        n0 = st.n
-        zero = np.zeros(ng)
-        st.append(zero, zero, zero, zero, zero, zero, np.full(ng, GHOST), -1 - st.id[src],
-                  z=zero, w=zero)
-        gidx = np.arange(n0, n0 + ng)
-        active = np.ones(ng, dtype=np.bool_)
-        m3.refresh_ghosts(st.x, st.y, st.z, st.u, st.v, st.w, st.rho, st.m, gidx, src, f1,
-                          f2, f3, self.pl, self.coeffs.noSlip, active, *self._hydro)
-        gcell, gout = run.cells.bin(st.x[n0:], st.y[n0:], st.z[n0:])
-        if gout:
-            keep = np.concatenate([np.ones(n0, dtype=bool), gcell >= 0])
-            st.keep(keep)
-            kg = gcell >= 0
-            gcell = gcell[kg]
-            gidx = np.arange(n0, n0 + int(kg.sum()))
-            src, f1, f2, f3 = src[kg], f1[kg], f2[kg], f3[kg]
-        self._active = np.empty(src.shape[0], dtype=np.bool_)
-        m3.ghost_activity(st.x, st.y, st.z, src, f1, f2, f3, self.pl, self.reach,
-                          self._active)
-        self._ghost = (gidx, src, f1, f2, f3)
-        self.before_evaluation(run)
-        return gcell
+    def _count(self, st, reach, count, margin=0.0):
+        """How many ghosts each particle makes within ``reach`` (into ``count``)."""
+        if self.three:
+            m3.count_ghosts(st.x, st.y, st.z, st.kind, self.pl, reach, count, margin)
+        else:
+            gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, reach, count, margin)
 
-    def _keeps_neighbours_3d(self, run) -> bool:
-        st = run.state
-        gidx, src, f1, f2, f3 = self._ghost
-        n_on = m3.ghost_activity(st.x, st.y, st.z, src, f1, f2, f3, self.pl, self.reach,
-                                 self._active)
-        count = kept_arrays(self, "_count", 1, st.n, np.int64)[0]
-        m3.count_ghosts(st.x, st.y, st.z, st.kind, self.pl, self.reach, count)
-        if int(count.sum()) != n_on:
-            return False
-        self.before_evaluation(run)
-        if not self.unweighted:
-            return True
-        nb_start, nb_idx = run.neighbours
-        return not m3.dormant_ghost_near_fluid(st.x, st.y, st.z, st.kind, gidx, self._active,
-                                               nb_start, nb_idx,
-                                               self.reach ** 2 * (1.0 + 1e-12))
+    def _fill(self, st, offset, ng) -> tuple:
+        """(src, walls): each ghost's particle and the walls it mirrors it across (two
+        columns of segments in 2-D, three of faces in 3-D; -1 for none)."""
+        src = np.empty(ng, dtype=np.int64)
+        walls = tuple(np.empty(ng, dtype=np.int64) for _ in range(3 if self.three else 2))
+        if self.three:
+            m3.fill_ghosts(st.x, st.y, st.z, st.kind, self.pl, self.build_reach, offset, src,
+                           *walls, self.margin)
+        else:
+            gh.fill_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.build_reach,
+                           offset, src, *walls, self.margin)
+        return src, walls
+
+    def _refresh(self, st, gidx, src, walls, active):
+        if self.three:
+            m3.refresh_ghosts(st.x, st.y, st.z, st.u, st.v, st.w, st.rho, st.m, gidx, src,
+                              *walls, self.pl, self.coeffs.noSlip, active, *self._hydro)
+        else:
+            gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, *walls,
+                              self.seg, self.coeffs.noSlip, active, *self._hydro)
+
+    def _activity(self, st, src, walls, active) -> int:
+        if self.three:
+            return m3.ghost_activity(st.x, st.y, st.z, src, *walls, self.pl, self.reach,
+                                     active)
+        return gh.ghost_activity(st.x, st.y, src, *walls, self.seg, self.reach, active)
+
+    def _dormant_near_fluid(self, st, gidx, nb_start, nb_idx, support2) -> bool:
+        if self.three:
+            return m3.dormant_ghost_near_fluid(st.x, st.y, st.z, st.kind, gidx, self._active,
+                                               nb_start, nb_idx, support2)
+        return gh.dormant_ghost_near_fluid(st.x, st.y, st.kind, gidx, self._active, nb_start,
+                                           nb_idx, support2)
 
     def before_neighbours(self, run):
         st = run.state
@@ -471,45 +447,38 @@ class MirrorGhosts(Boundary):
     def add_particles(self, run, cell):
         """Mirror every fluid particle near a wall across it (T(3.77)); ghosts that fall
         outside the cell grid are dropped (their particle is at the edge)."""
-        if self.three:
-            return self._add_particles_3d(run)
         st = run.state
         count = np.zeros(st.n, dtype=np.int64)
-        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.build_reach, count,
-                        self.margin)
+        self._count(st, self.build_reach, count, self.margin)
         offset = np.zeros(st.n, dtype=np.int64)
         np.cumsum(count[:-1], out=offset[1:])
         ng = int(count.sum())
-        src = np.empty(ng, dtype=np.int64)
-        s1 = np.empty(ng, dtype=np.int64)
-        s2 = np.empty(ng, dtype=np.int64)
-        gh.fill_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.build_reach, offset,
-                       src, s1, s2, self.margin)
+        src, walls = self._fill(st, offset, ng)
         n0 = st.n
-        st.append(np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng), np.zeros(ng),
-                  np.zeros(ng), np.full(ng, GHOST), -1 - st.id[src])
+        zero = np.zeros(ng)
+        st.append(zero, zero, zero, zero, zero, zero, np.full(ng, GHOST), -1 - st.id[src],
+                  **(dict(z=zero, w=zero) if self.three else {}))
         gidx = np.arange(n0, n0 + ng)
-        active = np.ones(ng, dtype=np.bool_)
-        gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2, self.seg,
-                          self.coeffs.noSlip, active, *self._hydro)
-        gcell, gout = run.cells.bin(st.x[n0:], st.y[n0:])
+        self._refresh(st, gidx, src, walls, np.ones(ng, dtype=np.bool_))
+        gcell, gout = run.cells.bin(*(a[n0:] for a in self._positions(st)))
         if gout:
             keep = np.concatenate([np.ones(n0, dtype=bool), gcell >= 0])
             st.keep(keep)
             kg = gcell >= 0
             gcell = gcell[kg]
-            gidx, src, s1, s2 = np.arange(n0, n0 + int(kg.sum())), src[kg], s1[kg], s2[kg]
+            gidx, src = np.arange(n0, n0 + int(kg.sum())), src[kg]
+            walls = tuple(w[kg] for w in walls)
         self._active = np.empty(src.shape[0], dtype=np.bool_)
-        gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
-        self._ghost = (gidx, src, s1, s2)
+        self._activity(st, src, walls, self._active)
+        self._ghost = (gidx, src, *walls)
         self.before_evaluation(run)          # dormant ghosts: mass 0
         return gcell
 
     def after_sort(self, run, order):
         inv = np.empty_like(order)
         inv[order] = np.arange(order.size)
-        gidx, src, *faces = self._ghost
-        self._ghost = (inv[gidx], inv[src], *faces)
+        gidx, src, *walls = self._ghost
+        self._ghost = (inv[gidx], inv[src], *walls)
 
     def keeps_neighbours(self, run) -> bool:
         """Whether the ghosts of the last build still serve this step (see above): the
@@ -517,35 +486,24 @@ class MirrorGhosts(Boundary):
         the support of a fluid particle. Sets which ghosts are active for this step."""
         if self._ghost is None:
             return False
-        if self.three:
-            return self._keeps_neighbours_3d(run)
         st = run.state
-        gidx, src, s1, s2 = self._ghost
-        n_on = gh.ghost_activity(st.x, st.y, src, s1, s2, self.seg, self.reach, self._active)
-        count = kept_arrays(self, "_count", 1, st.n, np.int64)[0]    # every entry written
-        gh.count_ghosts(st.x, st.y, st.kind, self.seg, self.corners, self.reach, count)
+        gidx, src, *walls = self._ghost
+        n_on = self._activity(st, src, walls, self._active)
+        count = kept_arrays(self, "_count_buf", 1, st.n, np.int64)[0]   # every entry written
+        self._count(st, self.reach, count)
         if int(count.sum()) != n_on:
             return False
         self.before_evaluation(run)
         if not self.unweighted:
             return True
         nb_start, nb_idx = run.neighbours
-        return not gh.dormant_ghost_near_fluid(st.x, st.y, st.kind, gidx, self._active,
-                                               nb_start, nb_idx,
-                                               self.reach ** 2 * (1.0 + 1e-12))
+        return not self._dormant_near_fluid(st, gidx, nb_start, nb_idx,
+                                            self.reach ** 2 * (1.0 + 1e-12))
 
     def before_evaluation(self, run):
-        if self._ghost is not None and self.three:
-            st = run.state
-            gidx, src, f1, f2, f3 = self._ghost
-            m3.refresh_ghosts(st.x, st.y, st.z, st.u, st.v, st.w, st.rho, st.m, gidx, src,
-                              f1, f2, f3, self.pl, self.coeffs.noSlip, self._active,
-                              *self._hydro)
-        elif self._ghost is not None:
-            st = run.state
-            gidx, src, s1, s2 = self._ghost
-            gh.refresh_ghosts(st.x, st.y, st.u, st.v, st.rho, st.m, gidx, src, s1, s2,
-                              self.seg, self.coeffs.noSlip, self._active, *self._hydro)
+        if self._ghost is not None:
+            gidx, src, *walls = self._ghost
+            self._refresh(run.state, gidx, src, walls, self._active)
 
     def walls_moved(self, run, offsets, velocities):
         if self.three:
