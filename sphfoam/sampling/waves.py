@@ -452,7 +452,7 @@ def _wetted(cx, cy, cz, cv, gx, gy, z_bot, z_top, step, inv_h, w0, support, kern
             z = 0.5 * (lo + hi)
             if now:
                 enter = z
-                if lowest != lowest:
+                if math.isnan(lowest):
                     lowest = z
             else:
                 wet_len += z - enter
