@@ -223,32 +223,45 @@ def test_fourtakas_diffuses_the_dynamic_part_conservatively(fourtakas):
 
 @pytest.mark.parametrize("gamma", [1.0, 1.4, 7.0])
 def test_hydrostatic_series_match_the_powers_to_round_off(gamma):
-    """The binomial series of Fourtakas's hydrostatic density differences (midpoint and
-    particle forms) against the closed forms in 40-digit decimal arithmetic, over the series'
-    range and beyond it (where the powers take over): within 2 ulp of the value."""
+    """The polynomials of Fourtakas's hydrostatic density differences (midpoint and particle
+    forms), as the pair code evaluates them, against the closed forms in 40-digit decimal
+    arithmetic: the binomial series over their range (within 2 ulp of the value), and beyond
+    it the Chebyshev interpolant of the case's own range (within SERIES_TOL)."""
     from decimal import Decimal, getcontext
 
-    from sphfoam.models.diffusion import (SERIES_Y, binomials, hydrostatic_midpoint,
-                                          hydrostatic_particle)
+    from sphfoam.models.diffusion import (SERIES_TOL, SERIES_Y, hydrostatic_coefficients,
+                                          hydrostatic_polynomial)
 
     getcontext().prec = 40
     a = 1.0 / gamma
-    c = binomials(a)
-    s = [2.0 * c[k] for k in range(1, 12, 2)]
-    d = [(-1.0) ** (k + 1) * c[k] for k in range(1, 13)]
     A = Decimal(1) / Decimal(repr(gamma))
     one = Decimal(1)
-    for v in (1e-9, -3e-6, 4e-4, -0.003, 0.0123, -0.031, 0.049, SERIES_Y, -SERIES_Y, 0.08,
-              -0.2, 0.4):
-        X = Decimal(repr(v))
-        mid = float((one + X) ** A - (one - X) ** A)
-        par = float(one - (one - X) ** A)
-        got_m = hydrostatic_midpoint(v, a, *s)
-        got_p = hydrostatic_particle(v, a, *d)
-        tol = 2.0 * np.spacing(abs(mid)) if abs(v) <= SERIES_Y else 1e-13 * abs(mid)
-        assert abs(got_m - mid) <= tol, (v, got_m, mid)
-        tol = 2.0 * np.spacing(abs(par)) if abs(v) <= SERIES_Y else 1e-13 * abs(par)
-        assert abs(got_p - par) <= tol, (v, got_p, par)
+    values = (1e-9, -3e-6, 4e-4, -0.003, 0.0123, -0.031, 0.049, SERIES_Y, -SERIES_Y)
+    for reach, vs in ((SERIES_Y, values), (0.08, values + (0.08, -0.08, 0.061)),
+                      (0.2, values + (-0.2, 0.11, 0.19))):
+        s = hydrostatic_coefficients("midpoint", a, reach)
+        d = hydrostatic_coefficients("particle", a, reach)
+        for v in vs:
+            X = Decimal(repr(v))
+            mid = float((one + X) ** A - (one - X) ** A)
+            par = float(one - (one - X) ** A)
+            got_m = float(hydrostatic_polynomial("midpoint", s, v))
+            got_p = float(hydrostatic_polynomial("particle", d, v))
+            tol = 2.0 * np.spacing(abs(mid)) if reach <= SERIES_Y else SERIES_TOL * abs(mid)
+            assert abs(got_m - mid) <= tol, (reach, v, got_m, mid)
+            tol = 2.0 * np.spacing(abs(par)) if reach <= SERIES_Y else SERIES_TOL * abs(par)
+            assert abs(got_p - par) <= tol, (reach, v, got_p, par)
+
+
+def test_hydrostatic_series_beyond_its_range_is_refused():
+    """A speed of sound so slow that the pair's hydrostatic pressure difference over the
+    support nears C_B: the particle form's polynomial cannot follow 1 - (1 - x)^a near x = 1,
+    and the case is refused with the remedy named."""
+    from sphfoam.models.diffusion import hydrostatic_coefficients
+
+    with pytest.raises(ValueError, match="speedOfSound"):
+        hydrostatic_coefficients("particle", 1.0 / 7.0, 0.6)
+    hydrostatic_coefficients("midpoint", 1.0 / 7.0, 0.2)     # within reach
 
 
 def test_bad_reference_is_refused():

@@ -17,26 +17,27 @@ antisymmetric in a and b, so sum_a V_a drho_a is unchanged by them.
 
 from __future__ import annotations
 
-from numba import njit
+import math
+
 from pydantic import Field
 
-from sphfoam.engine.fastmath import FASTMATH
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext
 from sphfoam.models.filters import DensityFilter
 from sphfoam.registry import Coeffs, register
 
-_JIT = dict(cache=True, fastmath=set(FASTMATH), inline="always")
-
-#: |y| up to which the hydrostatic density differences below are summed as binomial series
-#: instead of two powers (a call of about 20 ns each, per pair and evaluation). For
-#: a = 1/gamma in (0, 1], |C(a, k)| <= a / k, so the first omitted term of either series is
-#: below y^12 / 13 = 2e-17 of the first: the series is exact to round-off, and more accurate
-#: than the difference of two powers near 1 it replaces. Beyond it (coarse resolution with a
-#: slow speed of sound): the powers.
+#: |y| up to which the hydrostatic density differences below are the binomial series (a
+#: polynomial the pair code evaluates inline, Horner in y^2 or x). For a = 1/gamma in (0, 1],
+#: |C(a, k)| <= a / k, so the first omitted term of either series is below y^12 / 13 = 2e-17
+#: of the first: exact to round-off, and more accurate than the difference of two powers near
+#: 1 it replaces. A case whose pairs reach beyond it (a coarse resolution with a slow speed of
+#: sound) gets the polynomial of the same degree interpolating the closed form at the Chebyshev
+#: points of its own range (:func:`hydrostatic_coefficients`).
 SERIES_Y = 0.05
 #: the terms kept: y^1 ... y^11 (midpoint, odd), x^1 ... x^12 (particle)
 SERIES_K = 12
+#: the relative accuracy the polynomial must keep over the case's range
+SERIES_TOL = 1e-12
 
 
 def binomials(a: float, kmax: int = SERIES_K) -> list[float]:
@@ -48,22 +49,68 @@ def binomials(a: float, kmax: int = SERIES_K) -> list[float]:
     return out
 
 
-@njit(**_JIT)
-def hydrostatic_midpoint(y, a, s1, s3, s5, s7, s9, s11):
-    """(1 + y)^a - (1 - y)^a = 2 sum_(k odd) C(a, k) y^k, s_k = 2 C(a, k) (Horner in y^2)."""
-    if abs(y) <= SERIES_Y:
-        y2 = y * y
-        return y * (s1 + y2 * (s3 + y2 * (s5 + y2 * (s7 + y2 * (s9 + y2 * s11)))))
-    return (1.0 + y) ** a - (1.0 - y) ** a
+def hydrostatic_closed(form: str, a: float, v):
+    """The closed forms, through expm1 and log1p (no cancellation near 0): midpoint
+    (1 + y)^a - (1 - y)^a, particle 1 - (1 - x)^a."""
+    import numpy as np
+
+    v = np.asarray(v, dtype=float)
+    if form == "midpoint":
+        return np.expm1(a * np.log1p(v)) - np.expm1(a * np.log1p(-v))
+    return -np.expm1(a * np.log1p(-v))
 
 
-@njit(**_JIT)
-def hydrostatic_particle(x, a, d1, d2, d3, d4, d5, d6, d7, d8, d9, d10, d11, d12):
-    """1 - (1 - x)^a = sum_(k >= 1) d_k x^k, d_k = (-1)^(k+1) C(a, k) (Horner in x)."""
-    if abs(x) <= SERIES_Y:
-        return x * (d1 + x * (d2 + x * (d3 + x * (d4 + x * (d5 + x * (d6 + x * (
-            d7 + x * (d8 + x * (d9 + x * (d10 + x * (d11 + x * d12)))))))))))
-    return 1.0 - (1.0 - x) ** a
+def hydrostatic_polynomial(form: str, coeffs, v):
+    """The polynomial the pair code evaluates, in the same order: midpoint
+    y (s1 + y^2 (s3 + ...)), particle x (d1 + x (d2 + ...))."""
+    import numpy as np
+
+    v = np.asarray(v, dtype=float)
+    t = v * v if form == "midpoint" else v
+    acc = np.full_like(v, coeffs[-1])
+    for c in coeffs[-2::-1]:
+        acc = c + t * acc
+    return v * acc
+
+
+def hydrostatic_coefficients(form: str, a: float, reach: float) -> list[float]:
+    """The coefficients of the hydrostatic density difference's polynomial for arguments
+    |y| (midpoint) or |x| (particle) up to ``reach``: the binomial series, s_k = 2 C(a, k)
+    (k odd) or d_k = (-1)^(k+1) C(a, k), where ``reach`` <= SERIES_Y; beyond, the
+    polynomial of the same form interpolating the closed form at the Chebyshev points of
+    [0, reach^2] (midpoint, in y^2) or [-reach, reach] (particle). Refused (ValueError) where
+    it is not within SERIES_TOL of the closed form over the range."""
+    import numpy as np
+
+    c = binomials(a)
+    if form == "midpoint":
+        coeffs = [2.0 * c[k] for k in range(1, SERIES_K, 2)]
+    else:
+        coeffs = [(-1.0) ** (k + 1) * c[k] for k in range(1, SERIES_K + 1)]
+    if reach <= SERIES_Y:
+        return coeffs
+    n = len(coeffs)
+    cheb = np.cos(np.pi * (np.arange(n) + 0.5) / n)
+    P = np.polynomial.polynomial
+    if form == "midpoint":
+        t = 0.5 * reach * reach * (1.0 + cheb)
+        v = np.sqrt(t)
+        coeffs = P.polyfit(t, hydrostatic_closed(form, a, v) / v, n - 1)
+    else:
+        v = reach * cheb
+        coeffs = P.polyfit(v, hydrostatic_closed(form, a, v) / v, n - 1)
+    v = np.linspace(-reach, reach, 4001)
+    v = v[np.abs(v) > 1e-3 * reach]
+    exact = hydrostatic_closed(form, a, v)
+    err = float(np.max(np.abs(hydrostatic_polynomial(form, coeffs, v) - exact) / np.abs(exact)))
+    if not err <= SERIES_TOL:
+        raise ValueError(
+            f"fourtakasDeltaSPH: over the kernel support the pair's hydrostatic pressure "
+            f"difference reaches {reach if form == 'particle' else 2 * reach:.3g} C_B "
+            f"(C_B = c0^2 rho0 / gamma), where the {form} form's polynomial is off the closed "
+            f"form by {err:.1e}: raise the equation of state's speedOfSound"
+            + (" or use reference midpoint" if form == "particle" else ""))
+    return [float(x) for x in coeffs]
 
 
 def _dc0(name: str, delta: float, ctx: CaseContext) -> float:
@@ -230,18 +277,22 @@ class FourtakasDeltaSPH(DensityFilter):
             "midpoint: the pair's hydrostatic density difference about its mid-depth "
             "(antisymmetric, conserves mass); particle: the paper's form with a as reference"))
 
+    #: rho^H_a - rho^H_b = rho0 y P(y^2), y = x / 2 (:func:`hydrostatic_coefficients`), in
+    #: the loop (a call with a branch to the powers costs as much as the rest of the loop)
     _MIDPOINT = """\
-filt_x = filt_rho0_cb * dot(g@, d@_ab)
-filt_dh = filt_rho0 * hydrostatic_midpoint(0.5 * filt_x, filt_ig, filt_s1, filt_s3, filt_s5,
-                                           filt_s7, filt_s9, filt_s11)
+filt_y = 0.5 * (filt_rho0_cb * dot(g@, d@_ab))
+filt_y2 = filt_y * filt_y
+filt_dh = filt_rho0 * (filt_y * (filt_s1 + filt_y2 * (filt_s3 + filt_y2 * (filt_s5 + filt_y2 * (
+    filt_s7 + filt_y2 * (filt_s9 + filt_y2 * filt_s11))))))
 filt_psi = 2.0 * (rhoa - rhob - filt_dh) * dot(d@_ab, gW@) / (r2 + eta2)
 drho_a += filt_dc0 * h * filt_psi * mb / rhob
 """
     _PARTICLE = """\
 filt_x = filt_rho0_cb * dot(g@, d@_ab)
-filt_dh = filt_rho0 * hydrostatic_particle(filt_x, filt_ig, filt_d1, filt_d2, filt_d3, filt_d4,
-                                           filt_d5, filt_d6, filt_d7, filt_d8, filt_d9,
-                                           filt_d10, filt_d11, filt_d12)
+filt_dh = filt_rho0 * (filt_x * (filt_d1 + filt_x * (filt_d2 + filt_x * (filt_d3 + filt_x * (
+    filt_d4 + filt_x * (filt_d5 + filt_x * (filt_d6 + filt_x * (filt_d7 + filt_x * (
+        filt_d8 + filt_x * (filt_d9 + filt_x * (filt_d10 + filt_x * (filt_d11 + filt_x * (
+            filt_d12)))))))))))))
 filt_psi = 2.0 * (rhoa - rhob - filt_dh) * dot(d@_ab, gW@) / (r2 + eta2)
 drho_a += filt_dc0 * h * filt_psi * mb / rhob
 """
@@ -250,24 +301,25 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
         dc0 = _dc0(self.name, self.coeffs.delta, ctx)
         gamma = self.coeffs.gamma
         cb = ctx.c0 * ctx.c0 * ctx.rho0 / gamma
-        c = binomials(1.0 / gamma)
-        if self.coeffs.reference == "midpoint":
-            series = {f"filt_s{k}": 2.0 * c[k] for k in range(1, SERIES_K, 2)}
+        form = self.coeffs.reference
+        # the largest |x| = rho0 |g . r_ab| / C_B over the kernel support
+        reach = ctx.rho0 / cb * math.hypot(*ctx.g) * ctx.support
+        if form == "midpoint":
+            c = hydrostatic_coefficients(form, 1.0 / gamma, 0.5 * reach)
+            series = {f"filt_s{k}": v for k, v in zip(range(1, SERIES_K, 2), c)}
         else:
-            series = {f"filt_d{k}": (-1.0) ** (k + 1) * c[k] for k in range(1, SERIES_K + 1)}
+            c = hydrostatic_coefficients(form, 1.0 / gamma, reach)
+            series = {f"filt_d{k}": v for k, v in zip(range(1, SERIES_K + 1), c)}
         return {"filt_dc0": dc0, "filt_rho0": ctx.rho0, "filt_rho0_cb": ctx.rho0 / cb,
-                "filt_ig": 1.0 / gamma, **series}
-
-    def imports(self):
-        return ["from sphfoam.models.diffusion import hydrostatic_midpoint, "
-                "hydrostatic_particle"]
+                **series}
 
     #: the midpoint form's term for the pair (b, a): rho^H is odd in r_ab and
     #: r_ba . grad_b W_ba = r_ab . grad_a W_ab, so psi_ba = -psi_ab (half lists)
     _MIDPOINT_REACTION = """\
-filt_x_b = filt_rho0_cb * dot(g@, d@_ab)
-filt_dh_b = filt_rho0 * hydrostatic_midpoint(0.5 * filt_x_b, filt_ig, filt_s1, filt_s3,
-                                             filt_s5, filt_s7, filt_s9, filt_s11)
+filt_y_b = 0.5 * (filt_rho0_cb * dot(g@, d@_ab))
+filt_y2_b = filt_y_b * filt_y_b
+filt_dh_b = filt_rho0 * (filt_y_b * (filt_s1 + filt_y2_b * (filt_s3 + filt_y2_b * (
+    filt_s5 + filt_y2_b * (filt_s7 + filt_y2_b * (filt_s9 + filt_y2_b * filt_s11))))))
 filt_psi_b = 2.0 * (rhoa - rhob - filt_dh_b) * dot(d@_ab, gW@) / (r2 + eta2)
 drho_b -= filt_dc0 * h * filt_psi_b * ma / rhoa
 """
