@@ -65,6 +65,25 @@ def test_scan_finds_non_finite_values_and_ignores_ghosts():
     assert bad(st, NONFINITE) == [2, 4, 11]
 
 
+def test_scan_in_3d_flags_exactly_the_non_finite_components():
+    """3-D: a NaN or an infinity in z or w is found as in x, y, u, v, rho; the largest finite
+    values (whose sum would overflow) are not; scan and offenders agree."""
+    st = synthetic()
+    n = st.n
+    st = ParticleState(st.x, st.y, st.u, st.v, st.rho, st.m, st.kind, st.id, {},
+                       z=np.zeros(n), w=np.zeros(n))
+    big = np.finfo(float).max
+    st.x[0] = st.y[0] = st.z[0] = st.u[0] = big   # finite: not flagged
+    st.v[0] = st.w[0] = -big
+    st.z[3] = np.inf
+    st.w[5] = -np.inf
+    st.w[7] = np.nan
+    st.z[12] = np.nan         # a wall particle
+    st.w[13] = np.inf         # a ghost: ignored
+    assert run_scan(st, vmax=math.inf)[0] == 4
+    assert bad(st, NONFINITE) == [3, 5, 7, 12]
+
+
 def test_scan_finds_density_out_of_range():
     st = synthetic()
     st.rho[1] = 0.4 * RHO0
