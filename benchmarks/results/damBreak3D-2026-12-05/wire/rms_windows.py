@@ -2,6 +2,8 @@
 
     python rms_windows.py h30_to1.5s_heights.dat h30_to1.5s_heightsWire.dat \
         ../../../../tutorials/damBreak3D/validation/test_case_2_exp_data.dat
+    python rms_windows.py ../H30-6s/heights.dat ../H30-6s/heightsWire.dat \
+        ../../../../tutorials/damBreak3D/validation/test_case_2_exp_data.dat
 
 A dry gauge (NaN) reads 0, as the tutorial's metrics (missing zero). The measurement's
 columns for H1-H4 are 11, 10, 9 and 12 (its README: the labels are the wrong way round).
@@ -27,7 +29,10 @@ def measured(path):
 def main(a, b, meas):
     sa, sb, m = series(a), series(b), measured(meas)
     end = min(sa[-1, 0], sb[-1, 0])
-    for lo, hi in ((0.0, end), (0.0, 0.6), (0.6, min(1.3, end))):
+    windows = [(0.0, end)] + [(lo, min(hi, end)) for lo, hi in
+                              ((0.0, 0.6), (0.6, 1.3), (1.3, 2.2), (2.2, 3.2), (3.2, 6.0))
+                              if lo < end]
+    for lo, hi in windows:
         out = []
         for g, col in COLUMNS.items():
             for name, s in ((a, sa), (b, sb)):
