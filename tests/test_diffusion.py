@@ -261,6 +261,8 @@ def test_hydrostatic_series_beyond_its_range_is_refused():
 
     with pytest.raises(ValueError, match="speedOfSound"):
         hydrostatic_coefficients("particle", 1.0 / 7.0, 0.6)
+    with pytest.raises(ValueError, match="reference midpoint"):   # past x = 1: no real value
+        hydrostatic_coefficients("particle", 1.0 / 7.0, 3.0)
     hydrostatic_coefficients("midpoint", 1.0 / 7.0, 0.2)     # within reach
 
 

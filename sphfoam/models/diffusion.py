@@ -92,24 +92,31 @@ def hydrostatic_coefficients(form: str, a: float, reach: float) -> list[float]:
     n = len(coeffs)
     cheb = np.cos(np.pi * (np.arange(n) + 0.5) / n)
     P = np.polynomial.polynomial
-    if form == "midpoint":
-        t = 0.5 * reach * reach * (1.0 + cheb)
-        v = np.sqrt(t)
-        coeffs = P.polyfit(t, hydrostatic_closed(form, a, v) / v, n - 1)
-    else:
-        v = reach * cheb
-        coeffs = P.polyfit(v, hydrostatic_closed(form, a, v) / v, n - 1)
+    with np.errstate(all="ignore"):   # (1 - x)^a has no real value past x = 1: refused below
+        if form == "midpoint":
+            t = 0.5 * reach * reach * (1.0 + cheb)
+            v = np.sqrt(t)
+            s = t
+        else:
+            v = reach * cheb
+            s = v
+        f = hydrostatic_closed(form, a, v) / v
+        coeffs = P.polyfit(s, f, n - 1) if np.isfinite(f).all() else np.full(n, np.nan)
     v = np.linspace(-reach, reach, 4001)
     v = v[np.abs(v) > 1e-3 * reach]
-    exact = hydrostatic_closed(form, a, v)
-    err = float(np.max(np.abs(hydrostatic_polynomial(form, coeffs, v) - exact) / np.abs(exact)))
+    with np.errstate(all="ignore"):
+        exact = hydrostatic_closed(form, a, v)
+        err = float(np.max(np.abs(hydrostatic_polynomial(form, coeffs, v) - exact)
+                           / np.abs(exact)))
     if not err <= SERIES_TOL:
+        depth = reach if form == "particle" else 2 * reach
         raise ValueError(
-            f"fourtakasDeltaSPH: over the kernel support the pair's hydrostatic pressure "
-            f"difference reaches {reach if form == 'particle' else 2 * reach:.3g} C_B "
-            f"(C_B = c0^2 rho0 / gamma), where the {form} form's polynomial is off the closed "
-            f"form by {err:.1e}: raise the equation of state's speedOfSound"
-            + (" or use reference midpoint" if form == "particle" else ""))
+            "constant/sphProperties: densityFilter fourtakasDeltaSPH: over the kernel support "
+            f"the pair's hydrostatic pressure difference reaches {depth:.3g} C_B (C_B = c0^2 "
+            f"rho0 / gamma), beyond what its {form} form's polynomial follows to "
+            f"{SERIES_TOL:g}: the speed of sound is too slow for it (equationOfState: raise "
+            "speedOfSound, or vmax or densityVariation)"
+            + ("; or use reference midpoint" if form == "particle" else ""))
     return [float(x) for x in coeffs]
 
 
