@@ -57,10 +57,7 @@ def scan(x, y, z, u, v, w, rho, m, kind, three, rho_lo, rho_hi, speed2_max):
         k = kind[a]
         if k == GHOST:
             continue
-        zero = x[a] * 0.0 + y[a] * 0.0 + u[a] * 0.0 + v[a] * 0.0 + rho[a] * 0.0
-        if three:
-            zero += z[a] * 0.0 + w[a] * 0.0
-        if not zero == 0.0:            # a NaN or an infinity (as _finite)
+        if not _finite(x[a], y[a], z[a], u[a], v[a], w[a], rho[a], three):
             n_bad += 1
             continue
         if k != FLUID:
@@ -81,14 +78,14 @@ def scan(x, y, z, u, v, w, rho, m, kind, three, rho_lo, rho_hi, speed2_max):
 
 
 @njit(cache=True, inline="always")
-def _finite(x, y, z, u, v, w, rho, three, a):
-    """Whether the particle's position, velocity and density are all finite: a sum of each
+def _finite(xa, ya, za, ua, va, wa, rhoa, three):
+    """Whether a particle's position, velocity and density are all finite: a sum of each
     times 0.0 is 0.0 exactly when none is NaN or infinite (without fast-math), with no
-    branch per value. :func:`scan` writes the same test in its loop: through a call taking
-    the arrays and an index, its loop runs several times slower."""
-    zero = x[a] * 0.0 + y[a] * 0.0 + u[a] * 0.0 + v[a] * 0.0 + rho[a] * 0.0
+    branch per value. It takes the values, not the arrays and an index: through such a
+    call the scan's loop runs several times slower."""
+    zero = xa * 0.0 + ya * 0.0 + ua * 0.0 + va * 0.0 + rhoa * 0.0
     if three:
-        zero += z[a] * 0.0 + w[a] * 0.0
+        zero += za * 0.0 + wa * 0.0
     return zero == 0.0
 
 
@@ -109,7 +106,7 @@ def offenders(x, y, z, u, v, w, rho, kind, three, what, rho_lo, rho_hi, speed2_m
     for a in range(x.shape[0]):
         if kind[a] == GHOST:
             continue
-        finite = _finite(x, y, z, u, v, w, rho, three, a)
+        finite = _finite(x[a], y[a], z[a], u[a], v[a], w[a], rho[a], three)
         if what == NONFINITE:
             bad = not finite
         elif not finite or kind[a] != FLUID:

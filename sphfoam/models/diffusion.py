@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from pydantic import Field
 
 from sphfoam.engine.terms import Term
@@ -52,8 +53,6 @@ def binomials(a: float, kmax: int = SERIES_K) -> list[float]:
 def hydrostatic_closed(form: str, a: float, v):
     """The closed forms, through expm1 and log1p (no cancellation near 0): midpoint
     (1 + y)^a - (1 - y)^a, particle 1 - (1 - x)^a."""
-    import numpy as np
-
     v = np.asarray(v, dtype=float)
     if form == "midpoint":
         return np.expm1(a * np.log1p(v)) - np.expm1(a * np.log1p(-v))
@@ -63,8 +62,6 @@ def hydrostatic_closed(form: str, a: float, v):
 def hydrostatic_polynomial(form: str, coeffs, v):
     """The polynomial the pair code evaluates, in the same order: midpoint
     y (s1 + y^2 (s3 + ...)), particle x (d1 + x (d2 + ...))."""
-    import numpy as np
-
     v = np.asarray(v, dtype=float)
     t = v * v if form == "midpoint" else v
     acc = np.full_like(v, coeffs[-1])
@@ -80,8 +77,6 @@ def hydrostatic_coefficients(form: str, a: float, reach: float) -> list[float]:
     polynomial of the same form interpolating the closed form at the Chebyshev points of
     [0, reach^2] (midpoint, in y^2) or [-reach, reach] (particle). Refused (ValueError) where
     it is not within SERIES_TOL of the closed form over the range."""
-    import numpy as np
-
     c = binomials(a)
     if form == "midpoint":
         coeffs = [2.0 * c[k] for k in range(1, SERIES_K, 2)]
@@ -102,9 +97,8 @@ def hydrostatic_coefficients(form: str, a: float, reach: float) -> list[float]:
             s = v
         f = hydrostatic_closed(form, a, v) / v
         coeffs = P.polyfit(s, f, n - 1) if np.isfinite(f).all() else np.full(n, np.nan)
-    v = np.linspace(-reach, reach, 4001)
-    v = v[np.abs(v) > 1e-3 * reach]
-    with np.errstate(all="ignore"):
+        v = np.linspace(-reach, reach, 4001)
+        v = v[np.abs(v) > 1e-3 * reach]
         exact = hydrostatic_closed(form, a, v)
         err = float(np.max(np.abs(hydrostatic_polynomial(form, coeffs, v) - exact)
                            / np.abs(exact)))
@@ -309,8 +303,9 @@ drho_a += filt_dc0 * h * filt_psi * mb / rhob
         gamma = self.coeffs.gamma
         cb = ctx.c0 * ctx.c0 * ctx.rho0 / gamma
         form = self.coeffs.reference
-        # the largest |x| = rho0 |g . r_ab| / C_B over the kernel support
-        reach = ctx.rho0 / cb * math.hypot(*ctx.g) * ctx.support
+        # the largest |x| = rho0 |g . r_ab| / C_B over the kernel support (3 h, the widest
+        # registered kernel's, where the context does not give it)
+        reach = ctx.rho0 / cb * math.hypot(*ctx.g) * (ctx.support or 3.0 * ctx.h)
         if form == "midpoint":
             c = hydrostatic_coefficients(form, 1.0 / gamma, 0.5 * reach)
             series = {f"filt_s{k}": v for k, v in zip(range(1, SERIES_K, 2), c)}
