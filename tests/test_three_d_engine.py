@@ -24,17 +24,20 @@ MATCHED3D = MATCHED.parent / "damBreakMatched3D"
 DX = Case(MATCHED).context.dx
 
 
-def _pipeline(periodic: bool, lo, hi):
+def _pipeline(periodic, lo, hi):
+    """The matched case's pipeline in 3-D; ``periodic``: all axes or, a tuple, each."""
+    px, py, pz = periodic if isinstance(periodic, tuple) else (periodic,) * 3
     case = Case(MATCHED)
-    sel = dataclasses.replace(selection(case), dim=3, periodic_x=periodic,
-                              periodic_y=periodic, periodic_z=periodic)
+    sel = dataclasses.replace(selection(case), dim=3, periodic_x=px,
+                              periodic_y=py, periodic_z=pz)
     ctx = case.context
     return build_pipeline(sel, ctx, core_parameters(sel, ctx, lo, hi), domain_lo=lo,
                           domain_hi=hi), ctx
 
 
 def _list(pipe, x, y, z, kind, lo, hi, periodic):
-    cells = CellList(lo, hi, pipe.support_radius * 1.05, periodic, periodic, periodic)
+    px, py, pz = periodic if isinstance(periodic, tuple) else (periodic,) * 3
+    cells = CellList(lo, hi, pipe.support_radius * 1.05, px, py, pz)
     cell, outside = cells.bin(x, y, z)
     assert outside == 0
     order = cells.sort(cell)
@@ -43,20 +46,52 @@ def _list(pipe, x, y, z, kind, lo, hi, periodic):
     return (x, y, z, kind), start, idx, cells
 
 
-def test_the_3d_cell_walk_lists_every_pair_within_reach():
+@pytest.mark.parametrize("periodic", [False, (False, True, True), True],
+                         ids=["walls", "periodic-yz", "periodic"])
+def test_the_3d_cell_walk_lists_every_pair_within_reach(periodic):
+    """Random points, a cluster, and a lattice whose spacing divides the cell side (points
+    on cell faces, pairs exactly one side apart): every pair within the cell side is
+    listed and none beyond it, and no list is padded with particle a itself (the fill
+    pass listed as many as the count pass counted)."""
     rng = np.random.default_rng(3)
-    lo, hi = (0.0, 0.0, 0.0), (25 * DX, 15 * DX, 20 * DX)
-    pipe, _ = _pipeline(False, lo, hi)
+    # periodic axes share a cell size: the same length
+    lo, hi = (0.0, 0.0, 0.0), {False: (25 * DX, 15 * DX, 20 * DX), True: (16 * DX,) * 3}.get(
+        periodic, (25 * DX, 16 * DX, 16 * DX))
+    pipe, _ = _pipeline(periodic, lo, hi)
+    side = pipe.support_radius * 1.05
     n = 600
     x, y, z = (rng.uniform(a, b, n) for a, b in zip(lo, hi))
+    x[:60], y[:60], z[:60] = (rng.uniform(c, c + 0.2 * DX, 60) for c in (3 * DX, 7 * DX, 9 * DX))
+    g = np.arange(0.0, 9 * side, side / 3)
+    g = g[g < 15 * DX]
+    lx, ly, lz = (a.ravel() for a in np.meshgrid(g, g, g, indexing="ij"))
+    x, y, z = np.concatenate([x, lx]), np.concatenate([y, ly]), np.concatenate([z, lz])
+    n = x.shape[0]
     (x, y, z, kind), start, idx, cells = _list(pipe, x, y, z, np.zeros(n, dtype=np.int64),
-                                               lo, hi, False)
+                                               lo, hi, periodic)
+    owner = np.repeat(np.arange(n), np.diff(start))
+    assert not np.any(idx[:start[-1]] == owner)
     pts = np.column_stack([x, y, z])
-    want = cKDTree(pts).query_pairs(cells.cell_size * (1 - 1e-12))
+    box = np.array(hi) - np.array(lo) if periodic is True else None
+    if isinstance(periodic, tuple):                       # wrap y and z only: images
+        shifts = [(0.0, sy, sz) for sy in (-1, 0, 1) for sz in (-1, 0, 1)]
+        span = np.array(hi) - np.array(lo)
+        images = np.concatenate([pts + np.array(s) * span for s in shifts])
+        tree = cKDTree(images)
+        near = tree.query_ball_point(pts, cells.cell_size * (1 - 1e-12))
+        want = {(min(a, j % n), max(a, j % n)) for a in range(n) for j in near[a] if j % n != a}
+    else:
+        want = cKDTree(pts, boxsize=box).query_pairs(cells.cell_size * (1 - 1e-12))
     got = {(min(a, int(b)), max(a, int(b))) for a in range(n)
            for b in idx[start[a]:start[a + 1]]}
-    assert want <= got and all(np.linalg.norm(pts[a] - pts[b]) <= cells.cell_size * (1 + 1e-9)
-                               for a, b in got)
+    assert len(want) > 5000
+    assert want <= got
+    d = pts[[a for a, _ in got]] - pts[[b for _, b in got]]
+    if box is not None:
+        d -= box * np.round(d / box)
+    elif isinstance(periodic, tuple):
+        d[:, 1:] -= span[1:] * np.round(d[:, 1:] / span[1:])
+    assert np.all(np.linalg.norm(d, axis=1) <= cells.cell_size * (1 + 1e-9))
 
 
 def _rates(pipe, coords, kind, start, idx, rho, u=None):

@@ -70,7 +70,7 @@ cx_hi = min(ix + 2, ncx)
 for cy0 in range({ylo}, {yhi}):
     row = {cy} * ncx
     lo = cell_start[row + cx_lo]
-    hi = cell_start[row + cx_hi]
+    hi = cell_start[row + cx_hi]{rowskip}
     xs = x[lo:hi]
     ys = y[lo:hi]
 {kslice}    for j in range(hi - lo):
@@ -79,7 +79,7 @@ for cy0 in range({ylo}, {yhi}):
         dy_ab = ya - ys[j]
 {wrap}        r2 = dx_ab * dx_ab + dy_ab * dy_ab
         ok = (r2 < reach2){notself}{keep}
-{body}
+{body}{after}
 """
 
 
@@ -117,7 +117,7 @@ for cz0 in range({zlo}, {zhi}):
     for cy0 in range({ylo}, {yhi}):
         row = (cz * ncy + {cy}) * ncx
         lo = cell_start[row + cx_lo]
-        hi = cell_start[row + cx_hi]
+        hi = cell_start[row + cx_hi]{rowskip}
         xs = x[lo:hi]
         ys = y[lo:hi]
         zs = z[lo:hi]
@@ -128,11 +128,18 @@ for cz0 in range({zlo}, {zhi}):
             dz_ab = za - zs[j]
 {wrap}            r2 = dx_ab * dx_ab + dy_ab * dy_ab + dz_ab * dz_ab
             ok = (r2 < reach2){notself}{keep}
-{body}
+{body}{after}
 """
 
 
-def _cell_walk_3d(bodies, body: str, rows: str | None, count: bool) -> str:
+#: where the list leaves out pairs of two non-fluid particles, a non-fluid particle skips a
+#: row with no fluid particle (``fluid_upto``: the fluid particles before each sorted index)
+_ROW_SKIP = """
+    if not fluid_a and fluid_upto[hi] == fluid_upto[lo]:
+        continue"""
+
+
+def _cell_walk_3d(bodies, body: str, rows: str | None, count: bool, after: str) -> str:
     sel = bodies.plan.sel
     wrap = bodies._wrap()
     xlo, xhi, cx = cell_range(sel, "x", "ix", "ncx", "cx")
@@ -146,8 +153,10 @@ def _cell_walk_3d(bodies, body: str, rows: str | None, count: bool) -> str:
                                      notself=notself,
                                      keep=" & (fluid_a | (ks[j] == FLUID))" if fo else "",
                                      kslice="        ks = kind[lo:hi]\n" if fo else "",
+                                     rowskip=_ROW_SKIP.replace("\n", "\n    ") if fo else "",
                                      wrap=_block(wrap, 12) + ("\n" if wrap else ""),
-                                     body=_block(rows, 12))
+                                     body=_block(rows, 12),
+                                     after=("\n" + _block(after, 8)) if after else "")
     return _CELLS_3D.format(xlo=xlo, xhi=xhi, ylo=ylo, yhi=yhi, zlo=zlo, zhi=zhi, cx=cx,
                             cy=cy, cz=cz,
                             keep=(" or not (fluid_a or kind[b] == FLUID)" if fo else ""),
@@ -155,15 +164,16 @@ def _cell_walk_3d(bodies, body: str, rows: str | None, count: bool) -> str:
                             body=_block(body, 16))
 
 
-def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -> str:
+def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False,
+              after: str = "") -> str:
     """The 3 x 3 cell gather around particle ``a`` (within ``reach2``), for the list:
     ``body`` for each b within reach, or, where x is not periodic, ``rows`` for every
     candidate of the three row ranges (contiguous slices of the sorted particles), with
     ``ok`` true for those within reach (and, for ``count`` where ``counts_self``, for a
-    itself)."""
+    itself), then ``after`` once per row (its candidates are ``lo`` .. ``hi`` - 1)."""
     sel = bodies.plan.sel
     if sel.dim == 3:
-        return _cell_walk_3d(bodies, body, rows, count)
+        return _cell_walk_3d(bodies, body, rows, count, after)
     xlo, xhi, cx = cell_range(sel, "x", "ix", "ncx", "cx")
     ylo, yhi, cy = cell_range(sel, "y", "iy", "ncy", "cy")
     if rows is not None and not sel.periodic_x:
@@ -174,8 +184,10 @@ def cell_walk(bodies, body: str, rows: str | None = None, count: bool = False) -
         return _CELLS_ROWS.format(ylo=ylo, yhi=yhi, cy=cy, notself=notself,
                                   keep=" & (fluid_a | (ks[j] == FLUID))" if fo else "",
                                   kslice="    ks = kind[lo:hi]\n" if fo else "",
+                                  rowskip=_ROW_SKIP if fo else "",
                                   wrap=_block(wrap, 8) + ("\n" if wrap else ""),
-                                  body=_block(rows, 8))
+                                  body=_block(rows, 8),
+                                  after=("\n" + _block(after, 4)) if after else "")
     wrap = bodies._wrap()
     return _CELLS.format(xlo=xlo, xhi=xhi, ylo=ylo, yhi=yhi, cx=cx, cy=cy,
                          keep=(" or not (fluid_a or kind[b] == FLUID)"
@@ -250,6 +262,8 @@ FIELDS = {tuple(fields)!r}
 PAIR_CACHE = {tuple(cache)!r}{cache_const}{prepass_before}{half_sums}
 #: the neighbour list may leave out pairs of two non-fluid particles (Plan.fluid_pairs_only)
 FLUID_PAIRS_ONLY = {plan.fluid_pairs_only}
+#: the fill pass's contiguous chunks of particles (each makes its buffers once)
+FILL_CHUNKS = 64
 
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
@@ -258,6 +272,14 @@ def equation_of_state(rho, p, c, prm):
     for a in prange(rho.shape[0]):
 {_block(eos or "pass", 8)}
 ''']
+    fill_loop = _fill_loop(asm, load_x, rows=not sel.periodic_x)
+    # the fluid particles before each index of the sorted particles, for the rows' skip
+    fluid_upto = ("""
+    fluid_upto = np.empty(x.shape[0] + 1, dtype=np.int64)
+    fluid_upto[0] = 0
+    for b in range(x.shape[0]):
+        fluid_upto[b + 1] = fluid_upto[b] + (1 if kind[b] == FLUID else 0)"""
+                  if plan.fluid_pairs_only and not sel.periodic_x else "")
     parts.append(f'''
 
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
@@ -265,7 +287,7 @@ def count_neighbours({X}, kind, skip, cell_start, {grid}, prm, reach2,
                      count):
     """Neighbours of every particle within sqrt(reach2) (the cell side), from the cells;
     with ``skip``, none of a non-fluid particle's non-fluid neighbours."""
-{_block(bind, 4)}
+{_block(bind, 4)}{fluid_upto}
     for a in prange(x.shape[0]):
 {_block(load_x, 8)}
         fluid_a = (not skip) or kind[a] == FLUID
@@ -280,17 +302,8 @@ def fill_neighbours({X}, kind, skip, cell_start, {grid}, prm, reach2,
     """The neighbour list: b of particle a in nb_idx[nb_start[a]:nb_start[a + 1]], in the
     order of the cell walk (cells by row, particles by cell); with ``skip``, no pair of two
     non-fluid particles."""
-{_block(bind, 4)}
-    for a in prange(x.shape[0]):
-{_block(load_x, 8)}
-        fluid_a = (not skip) or kind[a] == FLUID
-        k = nb_start[a]
-        k_end = nb_start[a + 1]
-{_block(cell_walk(asm, "if k < k_end:" + chr(10) + "    nb_idx[k] = b" + chr(10) + "    k += 1",
-                     "if k < k_end:" + chr(10) + "    nb_idx[k] = b" + chr(10) + "k += ok"), 8)}
-        while k < k_end:            # (never: the count pass walked the same cells)
-            nb_idx[k] = a
-            k += 1
+{_block(bind, 4)}{fluid_upto}
+{_block(fill_loop, 4)}
 ''')
     if plan.has_stage("prepass"):
         loops = "".join(f'''
@@ -458,6 +471,41 @@ def working_precision(src: str, imports) -> str:
     pairs are rounded where the bodies form them, ``LoopBodies(precision="single")``)."""
     return generated.working_precision(src, generated.helper_names(imports),
                                        lambda name: name in _SINGLE_FUNCS)
+
+
+def _fill_loop(asm, load_x: str, rows: bool) -> str:
+    """The fill pass's loop over the particles. A particle whose count is 0 (a wall
+    particle with no fluid near) is not walked. Where the walk reads rows (x not periodic),
+    a row's candidates are tested in one loop into ``okb``, which vectorises like the count
+    pass, and a second loop appends those within reach to ``listed``, a's list, copied into
+    ``nb_idx`` at the end (about twice as fast as a test and a store per candidate); the two
+    buffers are made once per chunk of particles (``FILL_CHUNKS``), as long as the longest
+    row of three cells and the 3^DIM cells."""
+    head = [load_x, "k = nb_start[a]", "k_end = nb_start[a + 1]",
+            "if k == k_end:              # none: no walk", "    continue",
+            "fluid_a = (not skip) or kind[a] == FLUID"]
+    pad = ["while k < k_end:            # (never: the count pass walked the same cells)",
+           "    nb_idx[k] = a", "    k += 1"]
+    store = "if k < k_end:\n    nb_idx[k] = b\n    k += 1"
+    if not rows:
+        body = "\n".join(head + [cell_walk(asm, store)] + pad)
+        return f"for a in prange(x.shape[0]):\n{_block(body, 4)}"
+    walk = cell_walk(asm, store, "okb[j] = ok",
+                     after="for j in range(hi - lo):\n    listed[kk] = lo + j\n    kk += okb[j]")
+    body = "\n".join(head + ["kk = 0", walk,
+                             "kk = min(kk, k_end - k)",
+                             "for q in range(kk):", "    nb_idx[k + q] = listed[q]",
+                             "k += kk"] + pad)
+    return f"""\
+widest = 0
+for cc in range(cell_start.shape[0] - 1):
+    widest = max(widest, cell_start[cc + 1] - cell_start[cc])
+n_all = x.shape[0]
+for chunk in prange(FILL_CHUNKS):
+    okb = np.empty(3 * widest + 1, dtype=np.bool_)
+    listed = np.empty(3 ** DIM * widest + 1, dtype=np.int64)
+    for a in range(chunk * n_all // FILL_CHUNKS, (chunk + 1) * n_all // FILL_CHUNKS):
+{_block(body, 8)}"""
 
 
 def _self_count(plan) -> str:

@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from sphfoam.engine.state import FLUID, GHOST, PERSISTENT_I8, ParticleState
 
@@ -209,6 +209,20 @@ class BlowUp(RuntimeError):
         self.report = report
 
 
+#: the contiguous ranges the snapshot's parallel copy splits an array into
+COPY_CHUNKS = 64
+
+
+@njit(parallel=True, cache=True)
+def copy_into(dst, src):
+    """dst[:] = src[:] on numba's threads (the snapshot copies some twenty arrays a step: on
+    two threads about half numpy's single-threaded copy)."""
+    n = src.shape[0]
+    for c in prange(COPY_CHUNKS):
+        for i in range(c * n // COPY_CHUNKS, (c + 1) * n // COPY_CHUNKS):
+            dst[i] = src[i]
+
+
 # --- the last good state -------------------------------------------------------------------
 class Snapshot:
     """A copy of the persistent particle arrays (ghosts left out) with its time, step and dt.
@@ -253,7 +267,7 @@ class Snapshot:
 
     def _copy(self, src, key, real):
         if real is None:
-            np.copyto(self.arrays[key], src)
+            copy_into(self.arrays[key], src)
         else:
             np.compress(real, src, out=self.arrays[key])
 

@@ -226,7 +226,7 @@ def deal_bands(half, n, threads):
                 k += 1
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start):
     """Split the neighbour list for the half-list loops: ``nb_mid[a]`` is where the
     neighbours b > a of particle a start in its list; the cell rows (``ncy`` rows of ``ncx``
@@ -236,13 +236,35 @@ def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start
     ``band_start[i]`` is the first particle of band i (``band_start[nb]`` = n). Returns the
     number of bands nb; 0 unless, as the cell walk of particles sorted by cell makes them,
     every list holds its b < a before its b > a and every b > a lies in a's cell row or the
-    next (so in a's band or the next): the loops then gather over the full lists."""
+    next (so in a's band or the next): the loops then gather over the full lists. The
+    particles are split into ``REDUCTION_CHUNKS`` ranges run in parallel (each finds the
+    row of its first particle by bisection)."""
     n = nb_start.shape[0] - 1
     if cell_start[ncy * ncx] != n:
         return 0
-    for r in range(ncy):
+    nc = REDUCTION_CHUNKS
+    bad = np.zeros(nc, dtype=np.bool_)
+    for ci in prange(nc):
+        a0 = ci * n // nc
+        a1 = (ci + 1) * n // nc
+        if a1 <= a0:
+            continue
+        r_lo = 0                      # the last row starting at or before a0
+        r_hi = ncy
+        while r_hi - r_lo > 1:
+            mid = (r_lo + r_hi) // 2
+            if cell_start[mid * ncx] <= a0:
+                r_lo = mid
+            else:
+                r_hi = mid
+        r = r_lo
+        row_end = cell_start[(r + 1) * ncx]
         top = cell_start[min(r + 2, ncy) * ncx]
-        for a in range(cell_start[r * ncx], cell_start[(r + 1) * ncx]):
+        for a in range(a0, a1):
+            while a >= row_end:
+                r += 1
+                row_end = cell_start[(r + 1) * ncx]
+                top = cell_start[min(r + 2, ncy) * ncx]
             k = nb_start[a]
             k1 = nb_start[a + 1]
             while k < k1 and nb_idx[k] < a:
@@ -251,8 +273,10 @@ def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start
             while k < k1:
                 b = nb_idx[k]
                 if b <= a or b >= top:
-                    return 0
+                    bad[ci] = True
                 k += 1
+    if bad.any():
+        return 0
     target = max(n // max(bands, 1), 1)
     nb = 0
     band_start[0] = 0
