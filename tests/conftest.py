@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -9,6 +10,11 @@ import pytest
 from sphfoam.case.edit import clone_case, set_entry  # noqa: F401  (re-exported)
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "tutorials"
+
+# pytest-xdist gives its workers COLUMNS=80, and the CLI's rich console (made when sphfoam.cli
+# is imported, at collection) would fix its width from it: tests that ask CliRunner for a
+# wider console would not get one. The workers run as one process does, without it.
+os.environ.pop("COLUMNS", None)
 
 #: P's set-up of the wall case (P section 4: the finite Gaussian, XSPH, MLS every 20 steps, the
 #: mirrored bed's p_G = p_a, the KdV2 wave, P's predictor-corrector), the wall tutorial's
