@@ -115,9 +115,9 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
         f"({'loaded from cache' if sim.pipeline.cache_hit else 'compiled'})")
 
     def on_removal(rem):
-        cx, cy = rem.where.mean(axis=0)
+        near = ", ".join(f"{c:.4g}" for c in rem.where.mean(axis=0))     # (x, y[, z])
         log(f"time {sim.time:.6g}: removed {rem.count} particle(s) that left the domain "
-            f"near ({cx:.4g}, {cy:.4g}); ids {rem.ids[:10].tolist()}"
+            f"near ({near}); ids {rem.ids[:10].tolist()}"
             f"{' ...' if rem.count > 10 else ''}")
 
     sim.on_removal = on_removal

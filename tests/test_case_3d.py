@@ -97,6 +97,27 @@ def test_a_3d_tank_run_stays_hydrostatic_and_writes_3d_time_directories(tmp_path
     assert st.dimension == 3
 
 
+def test_3d_particles_leaving_through_an_open_side_are_removed_and_logged_in_3d(tmp_path):
+    """hydrostaticTank3D with its x = 0.4 m side open: the water spills over the edge of
+    the floor and falls out of the domain box, the run goes on to its end, and the log
+    says where the particles left as (x, y, z), the last time directory holding the
+    others."""
+    case = _copy(tmp_path)
+    _edit(case / "system" / "particleDict", r"dx\s+0.02;", "dx 0.04;")
+    _edit(case / "system" / "particleDict", r"open\s+top;", "open (top right);")
+    _edit(case / "system" / "controlDict", r"endTime\s+1;", "endTime 0.6;")
+    _edit(case / "system" / "controlDict", r"writeInterval\s+0.25;", "writeInterval 0.6;")
+    rep = sphfoam.run(case, progress=False)
+    assert rep.end_time == pytest.approx(0.6) and rep.removed > 0
+    lines = [ln for ln in (case / "log.sphfoam").read_text().splitlines()
+             if "left the domain" in ln]
+    assert sum(int(ln.split("removed ")[1].split()[0]) for ln in lines) == rep.removed
+    near = [float(v) for v in lines[0].split("near (")[1].split(")")[0].split(",")]
+    assert len(near) == 3 and near[0] > 0.4 and 0.0 < near[1] < 0.4 and near[2] < 0.0
+    f = read_state(case / "0.6", dim=3)
+    assert f["positions"].shape[0] == rep.particles
+
+
 def test_a_3d_case_refuses_what_has_no_3d_form_by_name(tmp_path):
     case = _copy(tmp_path)
     sph = case / "constant" / "sphProperties"

@@ -130,24 +130,30 @@ def scan_arrays(st) -> tuple:
 # --- the diagnosis -------------------------------------------------------------------------
 @dataclass
 class Region:
-    """Where the offending particles are: centroid and bounding box."""
+    """Where the offending particles are: centroid and bounding box, one component per
+    axis (two or three)."""
 
-    centroid: tuple[float, float]
-    lo: tuple[float, float]
-    hi: tuple[float, float]
+    centroid: tuple[float, ...]
+    lo: tuple[float, ...]
+    hi: tuple[float, ...]
 
     @classmethod
-    def of(cls, x: np.ndarray, y: np.ndarray) -> "Region | None":
-        ok = np.isfinite(x) & np.isfinite(y)
+    def of(cls, *coords: np.ndarray) -> "Region | None":
+        ok = np.logical_and.reduce([np.isfinite(c) for c in coords])
         if not ok.any():
             return None
-        x, y = x[ok], y[ok]
-        return cls((float(x.mean()), float(y.mean())), (float(x.min()), float(y.min())),
-                   (float(x.max()), float(y.max())))
+        coords = [c[ok] for c in coords]
+        return cls(tuple(float(c.mean()) for c in coords), tuple(float(c.min()) for c in coords),
+                   tuple(float(c.max()) for c in coords))
+
+    @staticmethod
+    def point(p, fmt: str = ".4g", sep: str = ", ") -> str:
+        """``p`` as (a, b[, c])."""
+        return "(" + sep.join(f"{v:{fmt}}" for v in p) + ")"
 
     def __str__(self) -> str:
-        (cx, cy), (x0, y0), (x1, y1) = self.centroid, self.lo, self.hi
-        return f"around ({cx:.4g}, {cy:.4g}), within ({x0:.4g}, {y0:.4g}) .. ({x1:.4g}, {y1:.4g})"
+        return (f"around {self.point(self.centroid)}, within {self.point(self.lo)} .. "
+                f"{self.point(self.hi)}")
 
 
 @dataclass
@@ -193,9 +199,9 @@ class Diagnosis:
                 ("message", f'"{self.message}"'), ("count", str(self.count)),
                 ("ids", "(" + " ".join(map(str, self.ids)) + ")")]
         if self.where is not None:
-            (cx, cy), (x0, y0), (x1, y1) = self.where.centroid, self.where.lo, self.where.hi
-            rows += [("centroid", f"({cx:.6g} {cy:.6g})"),
-                     ("boundBox", f"({x0:.6g} {y0:.6g}) ({x1:.6g} {y1:.6g})")]
+            w, pt = self.where, Region.point
+            rows += [("centroid", pt(w.centroid, ".6g", " ")),
+                     ("boundBox", f"{pt(w.lo, '.6g', ' ')} {pt(w.hi, '.6g', ' ')}")]
         rows.append(("lastGood", self.last_good or "none"))
         return rows
 
@@ -298,11 +304,12 @@ class Snapshot:
         sim.pipeline.equation_of_state(rho, p, c, sim.prm)
         return p
 
-    def positions_of(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions in the snapshot of the particles with these ids (those it holds)."""
+    def positions_of(self, ids: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Positions in the snapshot of the particles with these ids (those it holds): x, y
+        and, in 3-D, z."""
         self._host()
         hit = np.isin(self.arrays["id"], ids)
-        return self.arrays["x"][hit], self.arrays["y"][hit]
+        return tuple(self.arrays[k][hit] for k in ("x", "y", "z") if k in self.arrays)
 
 
 # --- the monitor ---------------------------------------------------------------------------
@@ -411,7 +418,7 @@ class HealthMonitor:
                               f"{100 * removed / self.n_fluid0:.3g} % of the {self.n_fluid0} "
                               f"fluid particles at its start; limit maxEscaped = "
                               f"{self.max_escaped:g}",
-                              ids, Region.of(where[:, 0], where[:, 1]))
+                              ids, Region.of(*where.T))
         ke_ref = 0.5 * mass * (0.1 * self.c0) ** 2
         if mass > 0 and ke > self.max_ke * ke_ref:
             st = sim.state
@@ -463,12 +470,12 @@ class HealthMonitor:
         their positions are no longer finite, where they were in the last good state."""
         st = sim.state
         ids = st.id[idx]
-        x, y = st.x[idx], st.y[idx]
-        ok = np.isfinite(x) & np.isfinite(y)
+        xs = [c[idx] for c in st.positions]
+        ok = np.logical_and.reduce([np.isfinite(c) for c in xs])
         if not ok.all():
-            px, py = self.snapshot.positions_of(ids[~ok])
-            x, y = np.concatenate([x[ok], px]), np.concatenate([y[ok], py])
-        return self._make(sim, kind, message, ids, Region.of(x, y),
+            then = self.snapshot.positions_of(ids[~ok])
+            xs = [np.concatenate([c[ok], p]) for c, p in zip(xs, then)]
+        return self._make(sim, kind, message, ids, Region.of(*xs),
                           len(idx) if count is None else count)
 
     def _make(self, sim, kind, message, ids, where, count=None) -> Diagnosis:
