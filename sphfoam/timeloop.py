@@ -17,7 +17,7 @@ from sphfoam._version import __version__
 from sphfoam.assemble import build_simulation
 from sphfoam.case.case import Case
 from sphfoam.case.times import time_name
-from sphfoam.engine.health import BlowUp, Diagnosis, HealthMonitor
+from sphfoam.engine.health import BlowUp, Diagnosis, HealthMonitor, Region
 from sphfoam.engine.schedule import Schedule
 from sphfoam.engine.state import GHOST, ParticleState
 from sphfoam.engine.threads import RunThreads, check_setting
@@ -115,9 +115,8 @@ def _run(case, c, log, progress, t_end, console=None, threads=None) -> RunReport
         f"({'loaded from cache' if sim.pipeline.cache_hit else 'compiled'})")
 
     def on_removal(rem):
-        near = ", ".join(f"{c:.4g}" for c in rem.where.mean(axis=0))     # (x, y[, z])
         log(f"time {sim.time:.6g}: removed {rem.count} particle(s) that left the domain "
-            f"near ({near}); ids {rem.ids[:10].tolist()}"
+            f"near {Region.point(rem.where.mean(axis=0))}; ids {rem.ids[:10].tolist()}"
             f"{' ...' if rem.count > 10 else ''}")
 
     sim.on_removal = on_removal

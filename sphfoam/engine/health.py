@@ -215,18 +215,12 @@ class BlowUp(RuntimeError):
         self.report = report
 
 
-#: the contiguous ranges the snapshot's parallel copy splits an array into
-COPY_CHUNKS = 64
-
-
 @njit(parallel=True, cache=True)
 def copy_into(dst, src):
     """dst[:] = src[:] on numba's threads (the snapshot copies some twenty arrays a step: on
     two threads about half numpy's single-threaded copy)."""
-    n = src.shape[0]
-    for c in prange(COPY_CHUNKS):
-        for i in range(c * n // COPY_CHUNKS, (c + 1) * n // COPY_CHUNKS):
-            dst[i] = src[i]
+    for i in prange(src.shape[0]):
+        dst[i] = src[i]
 
 
 # --- the last good state -------------------------------------------------------------------
