@@ -13,9 +13,9 @@ there instead of the hook; a hook with no declared form keeps the model off that
 * :class:`WallField`: ``attach``, ``before_neighbours``, ``walls_moved`` and
   ``keeps_neighbours``, a particle field that is a function of the position and the walls'
   segments, at every build of the neighbour list (e.g. the distance from the wall lines);
-* :class:`WallVelocity`: ``attach``, ``walls_moved``, ``before_evaluation`` and
-  ``after_step``, the wall particles' prescribed velocity put back (a boundary whose
-  prepass overwrites it).
+* :class:`WallVelocity`: ``attach``, ``walls_moved``, ``before_evaluation``,
+  ``after_rates``, ``after_density_rate`` and ``after_step``, the wall particles'
+  prescribed velocity put back (a boundary whose prepass overwrites it).
 
 Names hold ``@`` for the components as the terms write them (``p_dU@``: p_du, p_dv
 (, p_dw); ``a@``: ax, ay (, az)); :func:`sphfoam.engine.stepping.components`
@@ -86,12 +86,14 @@ class WallField:
 
 @dataclass(frozen=True)
 class WallVelocity:
-    """The wall particles' prescribed velocity put back before every evaluation and after
-    every step (for a boundary whose prepass overwrites it with an extrapolated one): each
+    """The wall particles' prescribed velocity put back before and after every evaluation
+    and after every step (for a boundary whose prepass overwrites it with an extrapolated
+    one, so that the integrators move wall particles with the prescribed velocity): each
     wall particle's velocity as set up, recorded by particle id when the simulation is
     built, or, once walls have moved, its wall entry's velocity (``walls_moved``)."""
 
-    hooks = ("attach", "walls_moved", "before_evaluation", "after_step")
+    hooks = ("attach", "walls_moved", "before_evaluation", "after_rates",
+             "after_density_rate", "after_step")
 
 
 def device_forms(model) -> tuple:

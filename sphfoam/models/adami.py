@@ -19,8 +19,9 @@ velocity. (AHA12 use the extrapolated velocity in the viscous term only and the 
 one in the continuity equation; here every term sees one velocity, whose normal component
 is the mirror image of the fluid's as for ``mirrorGhosts``, T(3.78).) The prescribed wall
 velocity (the wall particle's velocity as set up, e.g. a sliding wall's constant
-``velocity``, or its wall entry's motion) is put back on the wall particles before each
-evaluation and after each step (a run-time hook), so written fields show it. The wall
+``velocity``, or its wall entry's motion) is put back on the wall particles before and after
+each evaluation and after each step (run-time hooks): the integrators move the wall
+particles with it, never with the extrapolated one, and written fields show it. The wall
 acceleration a_w of eq. (27) is taken as zero: exact for fixed walls, an approximation for
 moving ones.
 
@@ -154,6 +155,14 @@ class Adami(Boundary):
                     u[on] = uu
 
     def before_evaluation(self, run):
+        self._prescribed_velocity(run)
+
+    def after_rates(self, run):
+        """The prescribed velocity back before the integrator's update: the update moves
+        wall particles with their velocity, which the prepass set to the extrapolated one."""
+        self._prescribed_velocity(run)
+
+    def after_density_rate(self, run):
         self._prescribed_velocity(run)
 
     def after_step(self, run):

@@ -146,9 +146,10 @@ class DeviceHooks:
         return U
 
     def run(self, hook: str, scale: float = 1.0):
-        """The additions declared for ``hook`` (``after_step``: ``scale`` the step taken)."""
+        """The additions declared for ``hook`` (``after_step``: ``scale`` the step taken);
+        after every evaluation and step, the walls' prescribed velocity (WallVelocity)."""
         sim = self.sim
-        if hook == "after_step":
+        if hook in ("after_rates", "after_density_rate", "after_step"):
             self._put_back_wall_velocity()
         for targets, rows, fluid_only in self.additions.get(hook, ()):
             for t, row in zip(targets, rows):
