@@ -25,8 +25,12 @@ particles with it, never with the extrapolated one, and written fields show it. 
 acceleration a_w of eq. (27) is taken as zero: exact for fixed walls, an approximation for
 moving ones.
 
-In 3-D the no-slip form runs as written (the sums over the 3-D neighbours, u, v and w); the
-free-slip form reads the 2-D wall normal and is refused there by name.
+In 3-D the no-slip form runs as written (the sums over the 3-D neighbours, u, v and w). The
+free-slip form reads the walls' normals, which the 3-D set-up writes for box and block walls
+(plane faces on the lattice: per axis, the sign of each face's normal the particle belongs
+to): each component along a face's normal is mirrored, 2 U_w,k - u~_f,k, and each other one
+is the fluid's, u~_f,k; on an edge or at a vertex every face's component is mirrored, the
+mirror image across both or all three planes.
 """
 
 from __future__ import annotations
@@ -69,6 +73,11 @@ _NO_SLIP = """\
 U@[a] = 2.0 * U@a - bnd_U@f
 """
 
+#: 3-D, axis-aligned walls: fld[F_n@, a] is nonzero along the normal of each face of a
+_FREE_SLIP_3D = """\
+U@[a] = 2.0 * U@a - bnd_U@f if fld[F_n@, a] != 0.0 else bnd_U@f
+"""
+
 _FREE_SLIP = """\
 if fld[F_corner, a] > 0.5:
     U@[a] = 2.0 * U@a - bnd_U@f
@@ -87,19 +96,19 @@ class Adami(Boundary):
     name = "adami"
     doc = ("wall-particle rows with p extrapolated from the fluid, Adami, Hu & Adams (2012) "
            "eq. (27), rho by the inverse EOS, no-slip u_w = 2 U_w - u~_f (eq. 22) or free slip")
-    #: the hooks handle w in 3-D; the free-slip form needs the 2-D wall normals (its term is
-    #: 2-D only, so it is refused in 3-D by name)
+    #: the hooks handle w in 3-D
     hook_dims = (2, 3)
 
     @property
     def wall_fields(self) -> tuple[str, ...]:
-        """The wall normal and corner flag, which only the free-slip form reads."""
-        return () if self.coeffs.noSlip else ("nx", "ny", "corner")
+        """The wall normal and corner flag, which only the free-slip form reads (nz in 3-D:
+        box and block walls)."""
+        return () if self.coeffs.noSlip else ("nx", "ny", "nz", "corner")
 
     class Coeffs(Coeffs):
         noSlip: bool = Field(True, description="no slip: u_w = 2 U_w - u~_f, AHA12 eq. (22); "
-                             "no: free slip (the fluid's tangential velocity; 2-D only, it reads "
-                             "the 2-D wall normal)")
+                             "no: free slip (the fluid's tangential velocity, the normal one "
+                             "mirrored; in 3-D on box and block walls)")
 
     def params(self, ctx: CaseContext):
         return {}
@@ -110,13 +119,14 @@ class Adami(Boundary):
         return {"ghost": "else"}
 
     def terms(self):
-        slip = _NO_SLIP if self.coeffs.noSlip else _FREE_SLIP
-        reads = ("W",) if self.coeffs.noSlip else ("W", "field.nx", "field.ny",
-                                                    "field.corner")
-        return [Term("wallState", ("prepass",), init=_INIT, pair=_PAIR, final=_FINAL + slip,
+        if self.coeffs.noSlip:
+            final, reads = _FINAL + _NO_SLIP, ("W",)
+        else:
+            final = {2: _FINAL + _FREE_SLIP, 3: _FINAL + _FREE_SLIP_3D}
+            reads = ("W", "field.nx", "field.ny", "field.nz", "field.corner")
+        return [Term("wallState", ("prepass",), init=_INIT, pair=_PAIR, final=final,
                      applies=("wall",), sees=("fluid",), reads=reads,
-                     writes=("rho", "u"), corrects=("p",), weighted=False,
-                     dims=(2, 3) if self.coeffs.noSlip else (2,))]   # (2-D wall normals)
+                     writes=("rho", "u"), corrects=("p",), weighted=False)]
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
     def device_forms(self):
