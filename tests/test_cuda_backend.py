@@ -123,7 +123,10 @@ HOOK_CASES = [
     pytest.param("solitaryWave", 0.125, 3, {
         "constant/sphProperties:boundary": {"type": "adami"},
         "system/particleDict:fluid.water.max": [3, 0.5],
-        "system/particleDict:walls.flume.max": [3, 1.2]}, marks=_SLOW)]
+        "system/particleDict:walls.flume.max": [3, 1.2]}, marks=_SLOW),
+    # Adami's free slip in 3-D: the box and block faces' normals (the tank, the box)
+    pytest.param("damBreak3D", 0.2, 3, {
+        "constant/sphProperties:boundary": {"type": "adami", "noSlip": "no"}}, marks=_SLOW)]
 
 
 @pytest.mark.parametrize("case, dx, steps, edits", CASES + HOOK_CASES)
