@@ -56,6 +56,8 @@ CASES: dict[str, tuple[str, dict]] = {
                                                     "noSlip": False}}),
     "db_repulsive2003": (DB, {f"{SPH}:boundary": {"type": "repulsiveMonaghan2003"}}),
     "db_hybrid": (DB, {f"{SPH}:boundary": {"type": "hybrid"}}),
+    "db_adami": (DB, {f"{SPH}:boundary": {"type": "adami"}}),
+    "db_adami_slip": (DB, {f"{SPH}:boundary": {"type": "adami", "noSlip": False}}),
     "db_mirror": (DB, {f"{SPH}:boundary": {"type": "mirrorGhosts", "noSlip": True}}),
     "db_shepard": (DB, {f"{SPH}:densityFilter": {"type": "shepard", "every": 5}}),
     "db_mls": (DB, {f"{SPH}:densityFilter": {"type": "mlsReinitialisation", "every": 5}}),
