@@ -490,6 +490,7 @@ def test_fraction_mode_in_the_objects(tmp_path):
     gauge reads, in waveGauges and crestTracker."""
     case, ctx = fake_case(tmp_path)
     assert build("type waveGauges; x (1);").coeffs.surface == "particle"
+    assert build("type waveGauges; x (1);").header_doc == waves.WaveGauges.doc
     with pytest.raises(Exception, match="fraction"):
         build("type waveGauges; x (1); surface fractions;")
     x0 = 10.0
@@ -502,6 +503,9 @@ def test_fraction_mode_in_the_objects(tmp_path):
     fo.end()
     _, _, data = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
     np.testing.assert_allclose(data[0, 1:], eta_sech2([5, 9.5, 10, 12.25], x0), atol=0.1 * DX)
+    head = (tmp_path / "postProcessing/fo/0/fo.dat").read_text().splitlines()[0]
+    assert head.startswith("# waveGauges: free-surface elevation eta(t) at wave gauges; "
+                           "surface fraction: sub-particle") and "highest particle" not in head
     ct = build("type crestTracker; xMin 2; xMax 18; still 1; surface fraction;")
     ct.start(case, ctx, "0")
     xc, ec = ct.measure(sim.state.x, sim.state.y, v)
@@ -515,6 +519,8 @@ def test_fraction_mode_in_the_objects(tmp_path):
     fw.execute(sim)
     fw.end()
     _, _, wire = read_dat(tmp_path / "postProcessing/fo/0/fo.dat")
+    assert "; surface wire: what a wire gauge reads" in \
+        (tmp_path / "postProcessing/fo/0/fo.dat").read_text().splitlines()[0]
     np.testing.assert_allclose(wire[-1, 1:], data[0, 1:], rtol=0, atol=1e-9)
     cw = build("type crestTracker; xMin 2; xMax 18; still 1; surface wire;")
     cw.start(case, ctx, "0")

@@ -30,13 +30,18 @@ class FunctionObject(Model, abc.ABC):
     #: further ``#`` header lines written before the column names (e.g. where sensors read)
     notes: tuple[str, ...] = ()
 
+    @property
+    def header_doc(self) -> str:
+        """What the output's first header line says the object records (its ``doc``)."""
+        return self.doc
+
     def start(self, case, ctx, start_time_name: str) -> None:
         self.case, self.ctx = case, ctx
         self.folder = Path(case.path) / "postProcessing" / self.object_name / start_time_name
         self.folder.mkdir(parents=True, exist_ok=True)
         self.file = self.folder / f"{self.object_name}.dat"
         self._fh = self.file.open("w")
-        self._fh.write(f"# {self.name}: {self.doc}\n"
+        self._fh.write(f"# {self.name}: {self.header_doc}\n"
                        + "".join(f"# {n}\n" for n in self.notes)
                        + "# " + "\t".join(self.columns) + "\n")
 

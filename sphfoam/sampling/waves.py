@@ -565,6 +565,28 @@ class _GaugeSurfaceCoeffs(FunctionObjectCoeffs):
         return self
 
 
+#: what each surface mode but the thesis's reads, for the output's header line
+SURFACE_READS = {
+    "fraction": "sub-particle, the highest point of the vertical where the SPH fluid fraction "
+                "sum_b V_b W(r - r_b) reaches 1/2",
+    "volume": "the bed plus the column's water volume per unit width, sum_b V_b G(x - x_b)",
+    "wire": "what a wire gauge reads, the lowest wet height plus the vertical's length where "
+            "the fluid fraction is at least 1/2",
+}
+
+
+class _SurfaceHeader:
+    """The header line of a gauge object names its ``surface`` mode where it is not the
+    thesis's highest particle (which its ``doc`` describes)."""
+
+    @property
+    def header_doc(self) -> str:
+        mode = self.coeffs.surface
+        if mode == "particle":
+            return self.doc
+        return f"{self.doc.split(':')[0]}; surface {mode}: {SURFACE_READS[mode]}"
+
+
 class ColumnSurface:
     """``surface volume``: the free surface at x is the bed's elevation b(x) plus the column's
     water volume per unit width (:func:`column_depth`), so the surface moves exactly as much
@@ -724,7 +746,7 @@ class GaugeLine(BaseModel):
 
 
 @register
-class WaveGauges(FunctionObject):
+class WaveGauges(_SurfaceHeader, FunctionObject):
     """Free-surface elevation eta(t) at a set of wave gauges, the SPH wave gauge of T §4.3.2.
 
     2-D (``x``): at each gauge the highest fluid particle within delta x = 2.5 dx on either
@@ -1317,7 +1339,7 @@ def fit_celerity(t, xc) -> tuple[float, float, float]:
 
 
 @register
-class CrestTracker(FunctionObject):
+class CrestTracker(_SurfaceHeader, FunctionObject):
     """Crest position x_c(t), crest height eta_c(t) and celerity of a travelling wave (T §4.4.2).
 
     The surface is read by wave gauges (T §4.3.2, dx/2 convention) every ``spacing`` (default
