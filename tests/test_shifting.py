@@ -403,6 +403,45 @@ def test_mass_flux_is_the_divergence_of_rho_delta_u(carried):
     assert abs(mdot.sum()) < 1e-13 * np.abs(mdot).sum()
 
 
+def test_mass_flux_takes_no_mass_from_a_particle_at_its_floor(carried):
+    """correctMass's floor (massFloor 0.5 by default): with the prescribed delta_u of the
+    test above and every fifth particle holding 0.5 rho0 dx^2, those particles give no mass
+    (their dm/dt >= 0 to round-off, where without the floor some gave), and the flux still
+    sums to zero to round-off; at 0.55 rho0 dx^2 (halfway up the ramp) they give less than
+    without the floor but still give."""
+    x, y = lattice()
+    sim = carried.sim(x, y)
+    st = sim.state
+    Box.evaluate(sim)
+    idx = carried.pipe.aux_index
+    k1, k2 = 2 * np.pi / (2 * L), 2 * np.pi / L
+    sim.aux[idx("shift_du")] = 0.01 * np.sin(k2 * st.x) * np.cos(k1 * st.y)
+    sim.aux[idx("shift_dv")] = 0.01 * np.cos(k2 * st.x) * np.sin(k1 * st.y)
+    m0 = 1000.0 * DX * DX
+    light = np.arange(st.n) % 5 == 0
+    names = list(sim.pipeline.module.PARAMS)
+    prm = sim.prm
+
+    def mdot(floor):
+        prm[names.index("shift_mfl")], prm[names.index("shift_mrp")] = floor, 1 / (0.2 * floor)
+        sim.pipeline.rates(*sim._grid_args(), *st.accelerations, st.drho, st.sigma)
+        return sim.aux[idx("shift_mdot")].copy()
+
+    for m_light in (0.5, 0.55):
+        st.m[light] = m_light * m0
+        free = mdot(1e-3)                               # no particle near this floor
+        held = mdot(0.5)
+        scale = np.abs(free).max()
+        gives = light & (free < -1e-3 * scale)
+        assert gives.sum() > 10
+        assert abs(held.sum()) < 1e-13 * np.abs(held).sum()
+        if m_light == 0.5:
+            assert held[light].min() > -1e-12 * scale
+        else:
+            assert np.all(held[gives] > free[gives]) and held[gives].min() < 0.0
+    prm[names.index("shift_mfl")], prm[names.index("shift_mrp")] = 0.5, 10.0
+
+
 def _shift_only(box, sim, dt, steps, carry):
     """Move the particles by the shift alone (as ``_relax``), with the mass the shift carries
     added after each move as the time loop's ``after_step`` does."""
@@ -469,7 +508,7 @@ def test_shift_carries_each_particles_volume_with_its_spacing(carried):
 def test_mass_carried_over_steps_conserves_mass(carried):
     """The simulation's steps with correctMass (the mass added after each step): the
     particles' masses change, their sum stays to round-off; correctMass without the
-    density's ALE term is refused by name."""
+    density's ALE term, and massFloor without correctMass, are refused by name."""
     x, y = perturbed(2)
     sim = carried.sim(x, y)
     st = sim.state
@@ -483,3 +522,5 @@ def test_mass_carried_over_steps_conserves_mass(carried):
     assert abs(st.m.sum() - total) < 1e-13 * total
     with pytest.raises(ValueError, match="correctMass needs correctDensity"):
         registry.build("particleShifting", {"type": "deltaPlusShifting", "correctMass": True})
+    with pytest.raises(ValueError, match="massFloor bounds the mass that correctMass carries"):
+        registry.build("particleShifting", {"type": "deltaPlusShifting", "massFloor": 0.4})

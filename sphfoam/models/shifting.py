@@ -73,7 +73,13 @@ is written with the centred flux of their SPH-ALE form (no Riemann solver):
 
     dm_a/dt = V_a sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab   (fluid a, b),
 
-antisymmetric in (a, b), so the fluid's mass is conserved to round-off. With the density's
+antisymmetric in (a, b), so the fluid's mass is conserved to round-off. A particle's mass
+is bounded below (``massFloor``): each pair's flux is scaled by a factor of its donor alone
+(the particle it leaves, which the flux's sign tells), 1 while the donor holds at least 1.2
+massFloor rho0 dx^d and falling linearly to 0 at massFloor rho0 dx^d, as flux-corrected
+transport limits a cell's outflow to keep it positive (Zalesak 1979, J. Comput. Phys. 31).
+The scaled flux is still antisymmetric (the donor of (b, a) is the donor of (a, b)), so the
+mass stays conserved, and a light particle still receives mass. With the density's
 own ALE term (``correctDensity``: drho_a/dt = -rho_a div u_a + delta_u_a . grad rho_a) the
 volume then obeys dV_a/dt = V_a div(u + delta_u)_a: it grows where the shift spreads the
 particles and shrinks where it packs them, as their spacing does, and the density stays the
@@ -134,9 +140,17 @@ class _ShiftCoeffs(Coeffs):
         "W_ab over fluid neighbours, the ALE mass flux of Vila (1999) / Oger et al. (2016) "
         "with the shift as the transport velocity's departure from the flow; conserves the "
         "fluid's mass to round-off. Needs correctDensity yes (the density's own ALE term)"))
+    massFloor: float = Field(0.5, gt=0.0, lt=0.8, description=(
+        "correctMass: the least mass of a fluid particle, as a fraction of rho0 dx^d; the "
+        "mass a particle gives fades linearly to nothing from 1.2 massFloor down to "
+        "massFloor (what it receives is not limited), so the fluid's mass is still "
+        "conserved"))
 
     @model_validator(mode="after")
     def _mass_needs_density(self):
+        if "massFloor" in self.model_fields_set and not self.correctMass:
+            raise ValueError("massFloor bounds the mass that correctMass carries: it "
+                             "applies with correctMass yes only")
         if self.correctMass and not self.correctDensity:
             raise ValueError("correctMass needs correctDensity yes: the mass flux keeps the "
                              "volumes m/rho consistent with the shifted positions only "
@@ -402,14 +416,22 @@ else:
     #: with correctMass: the ALE mass flux, Vila (1999) / Oger et al. (2016), centred:
     #: dm_a/dt = V_a sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab over fluid b,
     #: in the rates pass, which follows the pre-pass that made delta_u of every particle
+    #: each pair's flux scaled by its donor's limiter, min(max((m / (rho0 dx^d) - floor) /
+    #: (0.2 floor), 0), 1): a's own where the flux leaves a (negative), b's where it leaves b
     _MASS_INIT = """\
 shift_fa@ = rhoa * aux[I_shift_dU@, a]
 shift_mf = 0.0
+shift_ga = min(max((m[a] * shift_im0 - shift_mfl) * shift_mrp, 0.0), 1.0)
 """
     _MASS_PAIR = """\
 if kindb == FLUID:
     shift_f@ = shift_fa@ + rhob * aux[I_shift_dU@, b]
-    shift_mf += mb / rhob * dot(shift_f@, gW@)
+    shift_g = mb / rhob * dot(shift_f@, gW@)
+    if shift_g < 0.0:
+        shift_g *= shift_ga
+    else:
+        shift_g *= min(max((mb * shift_im0 - shift_mfl) * shift_mrp, 0.0), 1.0)
+    shift_mf += shift_g
 """
     _MASS_FINAL = """\
 aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
@@ -426,7 +448,15 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
                 # a wall particle's volume: dx^2 in 2-D, dx^3 in 3-D
                 "shift_qdx": ctx.dx / ctx.h,
                 "shift_vw": ctx.dx * ctx.dx * (ctx.dx if ctx.dim == 3 else 1.0),
-                **self.magnitude(ctx)}
+                **self.magnitude(ctx), **self._mass_limiter(ctx)}
+
+    def _mass_limiter(self, ctx: CaseContext) -> dict[str, float]:
+        """correctMass's limiter: 1 / (rho0 dx^d), the floor, 1 / its ramp (none without)."""
+        c = self.coeffs
+        if not c.correctMass:
+            return {}
+        return {"shift_im0": 1.0 / (ctx.rho0 * ctx.dx ** ctx.dim),
+                "shift_mfl": c.massFloor, "shift_mrp": 1.0 / (0.2 * c.massFloor)}
 
     def magnitude(self, ctx: CaseContext) -> dict[str, float]:
         return {}
