@@ -269,7 +269,8 @@ def test_a_model_with_no_device_form_is_refused_by_name(tutorial, monkeypatch):
         check_supported(sel3)
     monkeypatch.setattr(Adami, "device_forms", lambda self: ())
     with pytest.raises(Unsupported, match=r"boundary 'adami': its run-time hooks \(attach, "
-                       r"before_evaluation, walls_moved, after_step\)"):
+                       r"before_evaluation, after_rates, after_density_rate, walls_moved, "
+                       r"after_step\)"):
         check_supported(sel)
 
 
