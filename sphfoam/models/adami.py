@@ -167,13 +167,6 @@ class Adami(Boundary):
     def before_evaluation(self, run):
         self._prescribed_velocity(run)
 
-    def after_rates(self, run):
-        """The prescribed velocity back before the integrator's update: the update moves
-        wall particles with their velocity, which the prepass set to the extrapolated one."""
-        self._prescribed_velocity(run)
-
-    def after_density_rate(self, run):
-        self._prescribed_velocity(run)
-
-    def after_step(self, run):
-        self._prescribed_velocity(run)
+    #: after the passes too, before the integrator's update: the update moves wall particles
+    #: with their velocity, which the prepass set to the extrapolated one
+    after_rates = after_density_rate = after_step = before_evaluation
