@@ -154,8 +154,17 @@ CASE_DIRS = {
     # no XSPH, no MLS, the hydrostatic mirrored bed)
     "wallLowDiss": REPO / "tutorials" / "solitaryWallRunup",
 }
+#: the thesis's optimum flume (Shepard every 40 steps, no shifting, Goring's paddle), which the
+#: flume tutorial was until issue 35's best default: "flume" and the cases derived from it
+THESIS_FLUME = {
+    "constant/sphProperties:densityFilter": {"type": "shepard", "every": 40},
+    "constant/sphProperties:particleShifting": {"type": "none"},
+    "system/particleDict:walls.paddle.motion.waveMaker": {
+        "type": "goring", "height": 0.15, "depth": 0.5, "extended": False},
+}
 #: dictionary edits of a --case beyond the size (``clone_case`` syntax)
 CASE_EDITS = {
+    "flume": THESIS_FLUME,
     # the tutorial integrates with P's predictor-corrector since the twelfth session; "wall"
     # and the cases derived from it keep T's monaghan2007, as every figure measured before
     "wall": {
@@ -175,17 +184,20 @@ CASE_EDITS = {
                                                       "evaluation": "oncePerStep"},
     },
     "flumeLowDiss": {
+        **THESIS_FLUME,
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
                                                  "gamma": 7},
         "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1},
     },
     "flumeLowDissCv": {
+        **THESIS_FLUME,
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
                                                  "gamma": 7},
         "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1,
                                                     "correctVelocity": True},
     },
     "flumeLowDissRs": {
+        **THESIS_FLUME,
         "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "delta": 0.1,
                                                  "gamma": 7},
         "constant/sphProperties:particleShifting": {"type": "deltaPlusShifting", "Ma": 0.1,

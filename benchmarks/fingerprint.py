@@ -34,7 +34,15 @@ CASES: dict[str, tuple[str, dict]] = {
     "couette": ("couette", {}),
     "turbulentChannel": ("turbulentChannel", {}),
     "wavePaddle": ("wavePaddle", {}),
-    "solitaryWave": ("solitaryWave", {}),
+    # the thesis's optimum flume (the tutorial's default until issue 35's best default)
+    "solitaryWave": ("solitaryWave", {
+        f"{SPH}:densityFilter": {"type": "shepard", "every": 40},
+        f"{SPH}:particleShifting": {"type": "none"},
+        "system/particleDict:walls.paddle.motion.waveMaker": {
+            "type": "goring", "height": 0.15, "depth": 0.5, "extended": False}}),
+    # the tutorial as it is: Fourtakas's delta-SPH, delta+ shifting R 0.05, the exact
+    # wave's paddle
+    "solitaryWaveDefault": ("solitaryWave", {}),
     "solitaryWallRunup": ("solitaryWallRunup", {}),
     "solitaryCollision": ("solitaryCollision", {}),
     # P's set-up of the collision (KdV2 waves, P's bed: its default until issue 35's study)

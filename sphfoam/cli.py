@@ -318,12 +318,20 @@ def models(family: Optional[str] = typer.Argument(None, help="only this family")
         if any(d is not None for d in dims.values()):
             t.add_column("cases")
         for name, cls in entries.items():
-            coeffs = ", ".join(f"{k} ({f.default})" for k, f in cls.Coeffs.model_fields.items())
+            coeffs = ", ".join(f"{k} ({_default_of(f)})"
+                               for k, f in cls.Coeffs.model_fields.items())
             extra = [dimensions_text(dims[name])] if len(t.columns) > 3 else []
             t.add_row(name, cls.doc, coeffs, *extra)
         if not entries:
             t.add_row("-", "(none registered yet)", "")
         console.print(t)
+
+
+def _default_of(f) -> str:
+    """A coefficient's default as `sphfoam models` shows it ("required" where it has none)."""
+    if f.is_required():
+        return "required"
+    return str(f.default_factory() if f.default_factory is not None else f.default)
 
 
 @app.command()

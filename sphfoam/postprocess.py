@@ -79,7 +79,8 @@ def _wave_of(case: Case, height: float | None, depth: float | None):
         region = next(iter(case.particles.fluid.values()))
         return height or w.height, depth or (region.max[1] - region.min[1])
     raise CaseError.single("constant/waveProperties", "", "no wave height/depth: give "
-                           "--height and --depth, or use a goring paddle or initial waves")
+                           "--height and --depth, or use a solitary-wave paddle (goring, "
+                           "massFlux) or initial waves")
 
 
 def plot_gauges(case_dir, theory: str = "mcCowan", name: str | None = None,

@@ -93,6 +93,9 @@ def test_models_lists_families():
     for word in ("wendlandC2", "quartic", "tait", "artificial", "laminar", "stationaryGhosts",
                  "monaghan2007", "damBreakFront"):
         assert word in res.output
+    assert "Undefined" not in res.output            # a coefficient without a default
+    res = runner.invoke(app, ["models", "waveMaker"])
+    assert "height (required)" in " ".join(res.output.split())
     res = runner.invoke(app, ["models", "kernal"])
     assert res.exit_code == 2 and "did you mean 'kernel'?" in res.output
 

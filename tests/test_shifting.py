@@ -524,3 +524,21 @@ def test_mass_carried_over_steps_conserves_mass(carried):
         registry.build("particleShifting", {"type": "deltaPlusShifting", "correctMass": True})
     with pytest.raises(ValueError, match="massFloor bounds the mass that correctMass carries"):
         registry.build("particleShifting", {"type": "deltaPlusShifting", "massFloor": 0.4})
+
+
+def test_a_full_support_has_no_surface_normal(dplus):
+    """A still slab of 14 rows (a perfect lattice): the rows more than a support from both
+    free surfaces have nu_a of round-off, whose direction is anyone's; they get no normal
+    (n = 0), so the surface rule leaves their (round-off) shift alone and the CPU and the
+    device, whose round-off differs, agree. The surface rows keep their outward normals."""
+    x, y = lattice(rows=14, y0=0.5 * L)
+    sim = dplus.sim(x, y)
+    st = sim.state
+    idx = dplus.pipe.aux_index
+    n = np.hypot(sim.aux[idx("shift_nx")], sim.aux[idx("shift_ny")])
+    depth = np.minimum(st.y - y.min(), y.max() - st.y)
+    inner = depth > dplus.kappa * H + 0.1 * DX
+    assert inner.sum() >= 2 * NX
+    assert np.all(n[inner] == 0.0), n[inner].max()
+    top = st.y > y.max() - 0.5 * DX
+    assert np.all(sim.aux[idx("shift_ny")][top] > 0.99)

@@ -201,7 +201,7 @@ def test_a_stopped_run_continues_from_its_last_write(flume, tmp_path):
     changed since is kept aside as <run>.old and starts again."""
     body = f"""directory "{tmp_path / 'res'}";
         resolutions (0.1);
-        set {{ endTime 2; writeInterval 0.5; }}
+        set {{ endTime 2.5; writeInterval 0.5; }}
         variants {{ one {{ maxCo @; }} }}
         metrics {{ H1 {{ type waveHeight; function gauges; x 1; reference 0.15; }} }}"""
     p = write_study(flume, body.replace("@", "0.25"))
@@ -210,7 +210,7 @@ def test_a_stopped_run_continues_from_its_last_write(flume, tmp_path):
     run = tmp_path / "res" / "one_dx0.1"
     # what a stop after the write of t = 1 leaves: no result, the times after it gone
     (run / "result.json").unlink()
-    for t in ("1.5", "2"):
+    for t in ("1.5", "2", "2.5"):
         shutil.rmtree(run / t)
     # what lies beside the dictionaries (notes, logs, other study dictionaries) is no change
     (flume / "notes.txt").write_text("started the study again\n")
@@ -218,7 +218,7 @@ def test_a_stopped_run_continues_from_its_last_write(flume, tmp_path):
     (part,) = st.run_study(st.load(p), log=said.append)
     assert "1 to run" in said[0]
     assert part["outcome"] == "ok" and part["resumedFrom"] == 1.0, part
-    assert (run / "0.5").is_dir() and (run / "2").is_dir()
+    assert (run / "0.5").is_dir() and (run / "2.5").is_dir()
     assert 0 < part["steps"] < whole["steps"]
     # the step that writes t = 1 is where the restart takes over (monaghan2007 restarts bit
     # for bit): the same end, the same metric
@@ -228,12 +228,12 @@ def test_a_stopped_run_continues_from_its_last_write(flume, tmp_path):
     assert "## Runs continued after a stop" in md and "**one_dx0.1**: from t = 1 s" in md
     # changed since: the old run is kept, the new one starts from 0
     (run / "result.json").unlink()
-    shutil.rmtree(run / "2")
+    shutil.rmtree(run / "2.5")
     p = write_study(flume, body.replace("@", "0.2"))
     (again,) = st.run_study(st.load(p), log=said.append)
     assert "resumedFrom" not in again and again["outcome"] == "ok"
     old = tmp_path / "res" / "one_dx0.1.old"
-    assert (old / "1.5").is_dir() and not (old / "2").exists()
+    assert (old / "2").is_dir() and not (old / "2.5").exists()
     assert any("kept in" in m and "one_dx0.1.old" in m for m in said)
 
 

@@ -12,7 +12,9 @@ Both models share
   M_a = sum_b grad_a W_ab (x) r_ba V_b (1 for a full support, about 0.5 on a flat free surface,
   0 for an isolated particle), Marrone, Colagrossi, Le Touze & Graziani (2010, JCP 229),
   and the surface normal n_a = -L_a sum_b grad_a W_ab V_b / |...|, L_a = M_a^-1 (their
-  renormalised gradient of the colour function);
+  renormalised gradient of the colour function); none (n_a = 0, the surface rule then
+  leaves the shift whole) where |L_a nu_a| < 1e-6 / h, a full support whose sum is
+  round-off and would point anywhere;
 * the concentration gradient (``prepass`` stage, every evaluation; over every neighbour,
   walls included, so that a wall's particles fill the support), with the anti-clumping
   term of Monaghan (2000) as Lind et al. (2012) and Sun et al. (2017) write it,
@@ -224,7 +226,7 @@ if abs(shift_det) > 1e-3 * abs(shift_mxx * shift_myy) and abs(shift_det) > 0.0:
 else:
     shift_n@ = -shift_g@
 shift_nn = math.sqrt(dot(shift_n@, shift_n@))
-if shift_nn > 0.0:
+if shift_nn > shift_nmin:
     aux[I_shift_n@, a] = shift_n@ / shift_nn
 else:
     aux[I_shift_n@, a] = 0.0
@@ -285,7 +287,7 @@ if abs(shift_det) > 1e-3 * abs(shift_mxx * shift_myy * shift_mzz) and abs(shift_
 else:
     shift_n@ = -shift_g@
 shift_nn = math.sqrt(dot(shift_n@, shift_n@))
-if shift_nn > 0.0:
+if shift_nn > shift_nmin:
     aux[I_shift_n@, a] = shift_n@ / shift_nn
 else:
     aux[I_shift_n@, a] = 0.0
@@ -447,6 +449,9 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
                 "shift_lamf": c.freeSurfaceLambda,
                 # a wall particle's volume: dx^2 in 2-D, dx^3 in 3-D
                 "shift_qdx": ctx.dx / ctx.h,
+                # the smallest |L_a nu_a| taken as a direction: a full support's is round-off
+                # (1e-15 / h) and points anywhere; the surface's is of order 1 / h
+                "shift_nmin": 1e-6 / ctx.h,
                 "shift_vw": ctx.dx * ctx.dx * (ctx.dx if ctx.dim == 3 else 1.0),
                 **self.magnitude(ctx), **self._mass_limiter(ctx)}
 

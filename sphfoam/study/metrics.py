@@ -235,7 +235,7 @@ class WaveHeight(_GaugeMetric):
 
     class Coeffs(_GaugeCoeffs):
         reference: float | None = Field(None, gt=0, description=(
-            "wave height to compare with (m); default: the case's own, the Goring paddle's "
+            "wave height to compare with (m); default: the case's own, the paddle's wave maker's "
             "height or the initial wave's (constant/waveProperties)"))
 
     @property

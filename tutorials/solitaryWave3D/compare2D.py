@@ -4,7 +4,13 @@ between 2 and 18 m.
 
     python compare2D.py [PATH_TO_THE_2D_RUN] [--gauges NAME]
 
-PATH_TO_THE_2D_RUN defaults to ../solitaryWave (run it first); NAME is the waveGauges
+PATH_TO_THE_2D_RUN defaults to ../solitaryWave/study/case11, the 2-D flume with this case's
+models (the thesis's optimum: Shepard every 40 steps, Goring's paddle; the 2-D tutorial's
+default is the low-dissipation set-up since issue 35), made by
+
+    sphfoam study ../solitaryWave/studyDict --only case11
+
+(run it first); NAME is the waveGauges
 object both runs have (default: gauges, the tutorials' own; e.g. a `surface fraction` one
 added to both). Exits 1 if a gauge's crest height or the celerity differs by more than 1 %.
 """
@@ -16,7 +22,8 @@ import numpy as np
 
 here = Path(__file__).resolve().parent
 ap = argparse.ArgumentParser()
-ap.add_argument("other", nargs="?", type=Path, default=here.parent / "solitaryWave")
+ap.add_argument("other", nargs="?", type=Path,
+                default=here.parent / "solitaryWave" / "study" / "case11")
 ap.add_argument("--gauges", default="gauges")
 args = ap.parse_args()
 
