@@ -56,9 +56,10 @@ _SYMPLECTIC = {"system/sphSchemes:integrator": {"type": "symplectic"}}
 #: with SPHFOAM_SLOW_TESTS=1 (15-45 s each): couette at 11 columns across its period (the
 #: walk and the pairs wrapped in x, the sliding wall), the periodic cube (the walk wrapped
 #: in z too), and the tutorial selections the others do not cover: damBreak (quartic,
-#: symmetric, artificial viscosity, Monaghan 2007), solitaryWave (laminar, Fourtakas's delta-SPH,
-#: delta+ shifting with its surface rule on a still lattice, the paddle's prescribed motion), damBreak3D (wendlandC2, the delta-SPH filter of
-#: Fourtakas, the symplectic integrator, a block in the tank)
+#: symmetric, artificial viscosity, Monaghan 2007), solitaryWave (laminar, Fourtakas's
+#: delta-SPH, delta+ shifting with its surface rule on a still lattice, the paddle's
+#: prescribed motion), damBreak3D (wendlandC2, the delta-SPH filter of Fourtakas, the
+#: symplectic integrator, a block in the tank)
 _SLOW = pytest.mark.skipif(os.environ.get("SPHFOAM_SLOW_TESTS") != "1",
                            reason="the CUDA simulator, 40 s: set SPHFOAM_SLOW_TESTS=1")
 CASES = [("damBreakMatched", 0.1, 3, {}),
