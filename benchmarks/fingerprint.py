@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bench_engine import THESIS_FLUME
+
 ROOT = Path(__file__).resolve().parent.parent
 TUT = ROOT / "tutorials"
 SPH = "constant/sphProperties"
@@ -35,11 +37,7 @@ CASES: dict[str, tuple[str, dict]] = {
     "turbulentChannel": ("turbulentChannel", {}),
     "wavePaddle": ("wavePaddle", {}),
     # the thesis's optimum flume (the tutorial's default until issue 35's best default)
-    "solitaryWave": ("solitaryWave", {
-        f"{SPH}:densityFilter": {"type": "shepard", "every": 40},
-        f"{SPH}:particleShifting": {"type": "none"},
-        "system/particleDict:walls.paddle.motion.waveMaker": {
-            "type": "goring", "height": 0.15, "depth": 0.5, "extended": False}}),
+    "solitaryWave": ("solitaryWave", THESIS_FLUME),
     # the tutorial as it is: Fourtakas's delta-SPH, delta+ shifting R 0.05, the exact
     # wave's paddle
     "solitaryWaveDefault": ("solitaryWave", {}),

@@ -312,26 +312,19 @@ def models(family: Optional[str] = typer.Argument(None, help="only this family")
         t.add_column("type", style="bold")
         t.add_column("description")
         t.add_column("coefficients (default)")
-        from sphfoam.docs import dimensions_of, dimensions_text
+        from sphfoam.docs import default_text, dimensions_of, dimensions_text
 
         dims = {name: dimensions_of(fam, cls) for name, cls in entries.items()}
         if any(d is not None for d in dims.values()):
             t.add_column("cases")
         for name, cls in entries.items():
-            coeffs = ", ".join(f"{k} ({_default_of(f)})"
+            coeffs = ", ".join(f"{k} ({default_text(f, code=str)})"
                                for k, f in cls.Coeffs.model_fields.items())
             extra = [dimensions_text(dims[name])] if len(t.columns) > 3 else []
             t.add_row(name, cls.doc, coeffs, *extra)
         if not entries:
             t.add_row("-", "(none registered yet)", "")
         console.print(t)
-
-
-def _default_of(f) -> str:
-    """A coefficient's default as `sphfoam models` shows it ("required" where it has none)."""
-    if f.is_required():
-        return "required"
-    return str(f.default_factory() if f.default_factory is not None else f.default)
 
 
 @app.command()

@@ -17,7 +17,7 @@ import math
 import re
 import types
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union, get_args, get_origin
+from typing import Annotated, Any, Callable, Literal, Union, get_args, get_origin
 
 import annotated_types
 from pydantic import BaseModel, BeforeValidator
@@ -303,7 +303,9 @@ def _discriminator_value(model) -> str | None:
     return None
 
 
-def _default(f: FieldInfo) -> str:
+def default_text(f: FieldInfo, code: Callable[[str], str] = _code) -> str:
+    """A field's default as a dictionary would say it ("required" where it has none), each
+    value passed through ``code`` (backticks for the generated references)."""
     if f.is_required():
         return "required"
     if f.default_factory is not None:
@@ -313,10 +315,10 @@ def _default(f: FieldInfo) -> str:
     if v is None:
         return "unset"
     if isinstance(v, schemas.ModelSpec):
-        return _code(v.type)
+        return code(v.type)
     if isinstance(v, BaseModel):
         return "see below"
-    return _code(_value(v))
+    return code(_value(v))
 
 
 def _owner(model: type[BaseModel], key: str) -> type:
@@ -370,7 +372,7 @@ def _schema_section(model: type[BaseModel], title: str, level: int, intro: str =
         parts += [doc, ""]
     rows = []
     for key, f in model.model_fields.items():
-        rows.append([_code(key), _cell(_field_type(f)), _cell(_default(f)),
+        rows.append([_code(key), _cell(_field_type(f)), _cell(default_text(f)),
                      _cell(_description(model, key, f))])
     parts += [_table(["key", "type", "default", "description"], rows), ""]
     for key, f in model.model_fields.items():
@@ -476,7 +478,7 @@ def _coeff_lines(cls) -> str:
     lines = []
     for key, f in cls.Coeffs.model_fields.items():
         desc = _description(cls.Coeffs, key, f)
-        default = _default(f)
+        default = default_text(f)
         default = default if default == "required" else f"default {default}"
         line = f"`{key}` ({_field_type(f)}; {default})"
         lines.append(_cell(line + (f": {desc}" if desc else "")))
