@@ -101,6 +101,26 @@ def test_collision_study_clones_into_valid_cases(tmp_path):
         assert {w["theory"] for w in waves.values()} == {"euler"}
 
 
+def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
+    """tutorials/solitaryCollision/studyDict.convergence: every run clones into a valid case
+    measured against the potential flow's peak; the kernel-and-filter variants change only
+    the kernel and the density filter."""
+    base = _copy(tmp_path, "solitaryCollision")
+    s = st.load(base / "studyDict.convergence")
+    st.prepare(s)
+    for run in s.runs:
+        m = foamdict.read(Path(run.path) / "system" / "metricsDict")["metrics"]
+        assert m["peak"]["reference"] == 5.377
+    props = {r.variant: foamdict.read(Path(r.path) / "constant" / "sphProperties")
+             for r in s.runs}
+    kernel = {v: p["kernel"]["type"] for v, p in props.items()}
+    filt = {v: p["densityFilter"]["type"] for v, p in props.items()}
+    assert (kernel["default"], filt["default"]) == ("gaussian", "mlsReinitialisation")
+    assert (kernel["defaultQ"], filt["defaultQ"]) == ("quartic", "mlsReinitialisation")
+    assert (kernel["defaultNoMLS"], filt["defaultNoMLS"]) == ("gaussian", "none")
+    assert (kernel["defaultQNoMLS"], filt["defaultQNoMLS"]) == ("quartic", "none")
+
+
 @pytest.mark.parametrize("case, dict_name", [
     ("solitaryWave", "studyDict.lowDissipation"),
     ("solitaryWave", "studyDict.lowDissipationScreen"),
