@@ -137,6 +137,46 @@ def test_breaking_point_geometric_and_kinematic(tmp_path):
     assert data[0, 4] == pytest.approx(30.0, abs=4.0)
 
 
+def test_breaking_point_carries_on_after_a_restart(tmp_path):
+    """A run killed between the geometric criterion's first sample and its `persist` and
+    restarted from t = 0.5 writes the summary of the run that was not broken: the toe time
+    from the samples before the restart, the breaking points from the criteria's state
+    carried over, the celerity window refilled (sphfoam.sampling.beach._resume)."""
+    case, ctx = fake_case(tmp_path)
+    spec = ("type breakingPoint; xMin 1; xMax 7.5; still 0.5; toe 2.5; celerityWindow 0.2; "
+            "minHeight 0.05;")
+    c, faces = 2.0, [30, 30, 45, 60, 75, 90, 90, 90]
+
+    def sim(k):
+        x, y = wave(2.0 + c * 0.1 * k, 0.15, faces[k])
+        return FakeSim(x, y, np.where(y > D + 0.12, (0.5 if k < 6 else 1.5) * c, 0.0),
+                       time=0.1 * k)
+
+    whole = build(spec, name="whole")
+    whole.start(case, ctx, "0")
+    for k in range(len(faces)):
+        whole.execute(sim(k))
+    whole.end()
+    broken = build(spec, name="broken")
+    broken.start(case, ctx, "0")
+    for k in range(6):                        # killed after the sample at 0.5 s
+        broken.execute(sim(k))
+    again = build(spec, name="broken")
+    again.start(case, ctx, "0.5")             # restarted from the time directory 0.5
+    for k in range(6, len(faces)):
+        again.execute(sim(k))
+    again.end()
+    want = beach.read_breaking(tmp_path / "postProcessing/whole/0/summary.dat")
+    got = beach.read_breaking(tmp_path / "postProcessing/broken/0.5/summary.dat")
+    assert math.isfinite(want["geometric"]["toeToBreaking"])
+    for crit in ("geometric", "kinematic"):
+        for col, v in want[crit].items():
+            assert got[crit][col] == pytest.approx(v, rel=1e-8), (crit, col)
+    rows = np.loadtxt(tmp_path / "postProcessing/broken/0.5/broken.dat", ndmin=2)
+    ref = np.loadtxt(tmp_path / "postProcessing/whole/0/whole.dat", ndmin=2)[6:]
+    np.testing.assert_allclose(rows, ref, rtol=1e-8)  # the celerity right after the restart
+
+
 def test_breaking_point_not_found_and_checks(tmp_path):
     case, ctx = fake_case(tmp_path)
     fo = build("type breakingPoint; xMin 1; xMax 7.5; still 0.5;")

@@ -14,12 +14,14 @@ Both objects read the fluid particles only and use the surface convention of
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
 from numba import njit
 from pydantic import Field, field_validator, model_validator
 
+from sphfoam.io.tables import start_folders
 from sphfoam.registry import register
 from sphfoam.sampling.base import FunctionObject, FunctionObjectCoeffs
 from sphfoam.sampling.waves import (GAUGE_WINDOW, _fluid, _label, crest, fraction_surface,
@@ -181,6 +183,42 @@ class BreakingPoint(FunctionObject):
         #: a criterion met since (t, x, eta_c), not yet for `persist` seconds
         self.pending: dict[str, tuple[float, float, float]] = {}
         self.summary_file = self.folder / "summary.dat"
+        self._resume(float(start_time_name))
+
+    def _resume(self, start: float) -> None:
+        """A restarted run carries on from what the run before it wrote: its rows up to the
+        start time (older folders' rows before the next folder's start) give the samples
+        (the toe time and the celerity window) and the criteria's state, replayed sample by
+        sample; the kinematic x, which the rows do not hold, comes from that run's summary.
+        The rows hold 9 significant digits, so the carried state matches an unbroken run's
+        to that rounding."""
+        if start <= 0.0:
+            return
+        folders = [(t, p) for t, p in start_folders(Path(self.case.path), self.object_name)
+                   if t < start * (1 - 1e-12)]
+        fast: dict[float, float] = {}
+        rows = []
+        for i, (t0, folder) in enumerate(folders):
+            f = folder / f"{self.object_name}.dat"
+            if not f.is_file():
+                continue
+            end = folders[i + 1][0] if i + 1 < len(folders) else start
+            data = np.loadtxt(f, comments="#", ndmin=2)
+            if data.size:
+                last = i + 1 == len(folders)
+                keep = data[:, 0] <= end * (1 + 1e-12) if last else data[:, 0] < end
+                rows.append(data[keep])
+            summary = folder / "summary.dat"
+            if summary.is_file():
+                kin = read_breaking(summary).get("kinematic", {})
+                if math.isfinite(kin.get("time", math.nan)):
+                    fast[round(kin["time"], 6)] = kin["x"]
+        if not rows:
+            return
+        for t, xc, ec, xface, ang, _u, _c, ratio in np.vstack(rows):
+            self.samples.append((float(t), float(xc), float(ec)))
+            self._advance(float(t), float(xc), float(ec), float(xface), float(ang),
+                          float(ratio), fast.get(round(float(t), 6), math.nan))
 
     # --- one sample ---------------------------------------------------------------------
     def measure(self, xf, yf, uf, time):
@@ -239,6 +277,13 @@ class BreakingPoint(FunctionObject):
         ratio = ucrest / cel if (math.isfinite(cel) and cel > 0 and math.isfinite(ucrest)) \
             else math.nan
         self.write_row((t, xc, ec, xface, ang, ucrest, cel, ratio))
+        if self._advance(t, xc, ec, xface, ang, ratio, xfast):
+            self.write_summary()
+
+    def _advance(self, t, xc, ec, xface, ang, ratio, xfast) -> bool:
+        """The criteria at one sample: each must hold in every counted sample for `persist`
+        seconds from its first, which is then the breaking point. True when one was found
+        at this sample."""
         c = self.coeffs
         counts = math.isfinite(ec) and ec >= self.min_height and xc >= c.after
         met = {"geometric": (counts and math.isfinite(ang) and ang >= c.angle - 1e-6,
@@ -256,8 +301,7 @@ class BreakingPoint(FunctionObject):
             if t - first[0] >= c.persist * (1 - 1e-9):
                 self.found[crit] = first
                 new = True
-        if new:
-            self.write_summary()
+        return new
 
     # --- the summary --------------------------------------------------------------------
     @property
