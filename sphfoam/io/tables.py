@@ -41,3 +41,21 @@ def start_folders(case_path: Path, function: str) -> list[tuple[float, Path]]:
             if p.is_dir():
                 out.append((t, p))
     return sorted(out, key=lambda tp: tp[0])
+
+
+def join_series(folders: list[tuple[float, Path]], filename: str
+                ) -> tuple[list[str], np.ndarray]:
+    """(columns, rows) of one time series over start-time folders (oldest first), as
+    OpenFOAM's post-processing joins a restarted run's: each older folder's rows before the
+    next folder's start time, then the newest folder's. The columns are the newest file's;
+    an older folder without the file, or with other columns, is left out."""
+    cols, last = read_table(folders[-1][1] / filename)
+    parts = []
+    for (_, folder), (t1, _) in zip(folders[:-1], folders[1:]):
+        f = folder / filename
+        if not f.is_file():
+            continue
+        c, d = read_table(f)
+        if c == cols:
+            parts.append(d[d[:, 0] < t1 - 1e-9 * max(1.0, abs(t1))])
+    return cols, (np.vstack(parts + [last]) if parts else last)

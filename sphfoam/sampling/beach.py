@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 from pydantic import Field, field_validator, model_validator
 
-from sphfoam.io.tables import start_folders
+from sphfoam.io.tables import join_series, start_folders
 from sphfoam.registry import register
 from sphfoam.sampling.base import FunctionObject, FunctionObjectCoeffs
 from sphfoam.sampling.waves import (GAUGE_WINDOW, _fluid, _label, crest, fraction_surface,
@@ -195,27 +195,21 @@ class BreakingPoint(FunctionObject):
         if start <= 0.0:
             return
         folders = [(t, p) for t, p in start_folders(Path(self.case.path), self.object_name)
-                   if t < start * (1 - 1e-12)]
+                   if t < start * (1 - 1e-12)
+                   and (p / f"{self.object_name}.dat").is_file()]
+        if not folders:
+            return
         fast: dict[float, float] = {}
-        rows = []
-        for i, (t0, folder) in enumerate(folders):
-            f = folder / f"{self.object_name}.dat"
-            if not f.is_file():
-                continue
-            end = folders[i + 1][0] if i + 1 < len(folders) else start
-            data = np.loadtxt(f, comments="#", ndmin=2)
-            if data.size:
-                last = i + 1 == len(folders)
-                keep = data[:, 0] <= end * (1 + 1e-12) if last else data[:, 0] < end
-                rows.append(data[keep])
+        for _, folder in folders:
             summary = folder / "summary.dat"
             if summary.is_file():
                 kin = read_breaking(summary).get("kinematic", {})
                 if math.isfinite(kin.get("time", math.nan)):
                     fast[round(kin["time"], 6)] = kin["x"]
-        if not rows:
+        cols, rows = join_series(folders, f"{self.object_name}.dat")
+        if cols != list(self.columns):
             return
-        for t, xc, ec, xface, ang, _u, _c, ratio in np.vstack(rows):
+        for t, xc, ec, xface, ang, _u, _c, ratio in rows[rows[:, 0] <= start * (1 + 1e-12)]:
             self.samples.append((float(t), float(xc), float(ec)))
             self._advance(float(t), float(xc), float(ec), float(xface), float(ang),
                           float(ratio), fast.get(round(float(t), 6), math.nan))

@@ -30,7 +30,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 import sphfoam.registry as registry
 from sphfoam.case.errors import CaseError, did_you_mean, from_validation
 from sphfoam.case.metrics_dict import CONTROL_DICT, METRICS_DICT, MetricValue, relative_error
-from sphfoam.io.tables import read_table, start_folders
+from sphfoam.io.tables import join_series, read_table, start_folders
 from sphfoam.registry import Coeffs, Model, register
 
 
@@ -128,16 +128,7 @@ class Metric(Model, abc.ABC):
         if not newest.is_file():
             self.fail("function", f"{rel} not found: the function object '{fn}' has not "
                       "written it")
-        cols, last = read_table(newest)
-        parts = []
-        for (_, folder), (t1, _) in zip(folders[:-1], folders[1:]):
-            f = folder / filename
-            if not f.is_file():
-                continue
-            c, d = read_table(f)
-            if c == cols:
-                parts.append(d[d[:, 0] < t1 - 1e-9 * max(1.0, abs(t1))])
-        data = np.vstack(parts + [last]) if parts else last
+        cols, data = join_series(folders, filename)
         if data.shape[0] == 0:
             self.fail("function", f"{rel} holds no samples yet")
         return cols, data, rel
