@@ -118,6 +118,12 @@ HOOK_FORMS = json.loads((ROOT / "tests" / "cuda_hook_forms.json").read_text())
 
 HOOK_CASES = [
     ("damBreakMatched", 0.2, 3, HOOK_FORMS),
+    # Sun et al. (2019)'s consistent continuity: its pair term in the rates pass, added after
+    # the rates and the density-only pass
+    ("damBreakMatched", 0.2, 3, {
+        "system/sphSchemes:integrator": {"type": "monaghan2007"},
+        "constant/sphProperties:particleShifting": {
+            "type": "deltaPlusShifting", "surfaceLambda": 0, "consistentContinuity": "yes"}}),
     pytest.param("turbulentChannel", None, 3, _CHANNEL, marks=_SLOW),
     # Adami's walls on a 3 m flume with the paddle's motion: its wall entry's velocity put
     # back on the paddle's particles (walls_moved), 35 s
@@ -354,7 +360,8 @@ def test_declared_forms_stand_for_hooks_the_model_implements():
     from sphfoam.engine.hookforms import device_forms, uncovered
 
     variants = {"particleShifting": [{}, {"correctVelocity": True},
-                                     {"correctDensity": True, "correctMass": True}],
+                                     {"correctDensity": True, "correctMass": True},
+                                     {"consistentContinuity": True}],
                 "turbulence": [{}, {"wallLaw": "smooth"}]}
     declared = set()
     for family, models in registry.families().items():

@@ -301,3 +301,27 @@ def test_approximate_theories_start_solenoidal(tutorial, theory):
                   (sw.u(st.x[f], st.y[f]), sw.w(st.x[f], st.y[f])))
         np.testing.assert_allclose(st.u[f], uu, rtol=1e-9)
         np.testing.assert_allclose(st.v[f], ww, rtol=1e-9, atol=1e-12)
+
+
+def test_packing_benchmark_reads_a_still_tank(tmp_path):
+    """benchmarks/packing.py (issue 35, the flume's packing drift): its still tank, cloned
+    from the flume tutorial at d/dx = 10 and run for 0.1 s, reads at t = 0 the set-up's own
+    state: the bulk's fluid fraction 1 within 0.1 %, the level 0.5 m by the volumes and by
+    the particles, no motion, the bulk density's slope the Tait equation's hydrostatic one
+    within 0.5 %; at 0.1 s the water has barely moved (rms speed below 2 cm/s)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "benchmarks" / "packing.py"
+    spec = importlib.util.spec_from_file_location("packing", path)
+    packing = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(packing)
+    rows = packing.main(["--dx", "0.05", "--end", "0.1", "--write", "0.1",
+                         "--keep", str(tmp_path / "tank"), "--json"])
+    first, last = rows[0], rows[-1]
+    assert first["t"] == 0.0 and abs(last["t"] - 0.1) < 1e-9
+    assert abs(first["fraction"] - 1.0) < 1e-3, first
+    assert abs(first["level_volume"] - 0.5) < 1e-4 and abs(first["level_particles"] - 0.5) < 1e-4
+    assert first["u_rms"] == 0.0
+    assert abs(first["drho_dz_ratio"] - 1.0) < 5e-3, first
+    assert 0.0 < last["u_rms"] < 0.02, last

@@ -91,6 +91,24 @@ The flux is summed in the rates pass (after the pre-pass that makes delta_u), an
 the last evaluation's flux is added once per step, m_a += dt dm_a/dt, after the step
 (``after_step``). It reads delta_u of the neighbours, so the rates pass gathers over full
 lists where this is selected.
+
+With ``consistentContinuity yes`` the density takes the continuity equation of the
+consistent shifting of Sun, Colagrossi, Marrone, Antuono & Zhang (2019, CMAME 348), for
+particles moving with u + delta_u and a mass kept by each:
+
+    drho_a/dt += sum_b m_b (delta_u_a - delta_u_b) . grad_a W_ab
+               + sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab,
+
+the first the continuity's pair term T(3.18) with the shift's velocity (each density then
+changes as its kernel sum does when the shift moves the particles: -rho div delta_u), the
+second the shift's mass flux div(rho delta_u) in its sum form (the two together are
+delta_u . grad rho in the continuum, and the first alone is unstable at walls and in still
+water), over the neighbours the continuity sees (a wall's delta_u is 0), summed in the rates
+pass and added after the rates and after the density-only pass (from the last rates
+evaluation). It stops the packing drift of the density diffusion with the shift in still
+water at d/dx = 20 over 10 s; at d/dx = 40 the water's density then rises from 5 s and
+blows up by 9 s (docs/low-dissipation.md, *The packing drift in still water*). Not with
+``correctDensity`` or ``correctMass``.
 """
 
 from __future__ import annotations
@@ -142,6 +160,15 @@ class _ShiftCoeffs(Coeffs):
         "W_ab over fluid neighbours, the ALE mass flux of Vila (1999) / Oger et al. (2016) "
         "with the shift as the transport velocity's departure from the flow; conserves the "
         "fluid's mass to round-off. Needs correctDensity yes (the density's own ALE term)"))
+    consistentContinuity: bool = Field(False, description=(
+        "the continuity equation of Sun et al. (2019)'s consistent shifting: drho_a/dt += "
+        "sum_b m_b (delta_u_a - delta_u_b) . grad_a W_ab (the continuity T(3.18) for "
+        "particles moving with u + delta_u, so each density follows the room its shifted "
+        "position gives it) + sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab "
+        "(div(rho delta_u), the shift's mass flux kept in the density), over the "
+        "continuity's neighbours (walls' delta_u = 0). no (the default): the shift moves the "
+        "particles but not their densities. In still water it stops the packing drift at "
+        "d/dx = 20 but blows up after 5-9 s at d/dx = 40 (docs/low-dissipation.md)"))
     massFloor: float = Field(0.5, gt=0.0, lt=0.8, description=(
         "correctMass: the least mass of a fluid particle, as a fraction of rho0 dx^d; the "
         "mass a particle gives fades linearly to nothing from 1.2 massFloor down to "
@@ -153,6 +180,11 @@ class _ShiftCoeffs(Coeffs):
         if "massFloor" in self.model_fields_set and not self.correctMass:
             raise ValueError("massFloor bounds the mass that correctMass carries: it "
                              "applies with correctMass yes only")
+        if self.consistentContinuity and (self.correctDensity or self.correctMass):
+            raise ValueError("consistentContinuity moves each particle's density with its "
+                             "shift already (the continuity with u + delta_u and div(rho "
+                             "delta_u)): it is not combined with correctDensity or "
+                             "correctMass")
         if self.correctMass and not self.correctDensity:
             raise ValueError("correctMass needs correctDensity yes: the mass flux keeps the "
                              "volumes m/rho consistent with the shifted positions only "
@@ -166,6 +198,14 @@ def add_mass(m, mdot, kind, dt):
     for a in prange(m.shape[0]):
         if kind[a] == 0:
             m[a] += dt * mdot[a]
+
+
+@njit(parallel=True, cache=True, fastmath=set(FASTMATH))
+def add_fluid_rate(rate, extra, kind):
+    """rate_a += extra_a for the fluid particles (kind 0); walls keep theirs."""
+    for a in prange(rate.shape[0]):
+        if kind[a] == 0:
+            rate[a] += extra[a]
 
 
 def _sum_names(init: str) -> tuple[str, ...]:
@@ -439,6 +479,26 @@ if kindb == FLUID:
 aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
 """
 
+    #: with consistentContinuity, Sun et al. (2019): the continuity's pair term T(3.18)
+    #: with the shift's velocity, m_b (delta_u_a - delta_u_b) . grad_a W_ab, and the shift's
+    #: mass flux div(rho delta_u)_a in its sum form V_b (rho_a delta_u_a + rho_b delta_u_b) .
+    #: grad_a W_ab, over the neighbours the continuity sees (a wall's delta_u is 0), in the
+    #: rates pass after the pre-pass that made delta_u
+    _CONSISTENT_INIT = """\
+shift_va@ = aux[I_shift_dU@, a]
+shift_fa@ = rhoa * shift_va@
+shift_dv = 0.0
+"""
+    _CONSISTENT_PAIR = """\
+shift_vb@ = aux[I_shift_dU@, b]
+shift_w@ = shift_va@ - shift_vb@
+shift_f@ = shift_fa@ + rhob * shift_vb@
+shift_dv += mb * (dot(shift_w@, gW@) + dot(shift_f@, gW@) / rhob)
+"""
+    _CONSISTENT_FINAL = """\
+aux[I_shift_dvol, a] = shift_dv
+"""
+
     def imports(self):
         return ["import math"]
 
@@ -523,6 +583,11 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
                               pair=self._MASS_PAIR, final=self._MASS_FINAL,
                               reads=("gradW", *self._DU), writes=("aux.shift_mdot",),
                               dims=(2,)))
+        if self.coeffs.consistentContinuity:     # checked in 2-D only
+            terms.append(Term("shiftContinuity", ("rates",), init=self._CONSISTENT_INIT,
+                              pair=self._CONSISTENT_PAIR, final=self._CONSISTENT_FINAL,
+                              reads=("gradW", *self._DU),
+                              writes=("aux.shift_dvol",), dims=(2,)))
         return terms
 
     @property
@@ -538,13 +603,17 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
     _DENSITY_RATE = AuxAddition("after_rates", "drho", "shift_drho")
     _DENSITY_ONLY_RATE = AuxAddition("after_density_rate", "drho", "shift_drho")
     _MASS = AuxAddition("after_step", "m", "shift_mdot", fluid_only=True)
+    _VOLUME_RATE = AuxAddition("after_rates", "drho", "shift_dvol", fluid_only=True)
+    _VOLUME_ONLY_RATE = AuxAddition("after_density_rate", "drho", "shift_dvol",
+                                    fluid_only=True)
 
     def device_forms(self):
         c = self.coeffs
         return ((self._ADVECTION,)
                 + ((self._VELOCITY_RATE,) if c.correctVelocity else ())
                 + ((self._DENSITY_RATE, self._DENSITY_ONLY_RATE) if c.correctDensity else ())
-                + ((self._MASS,) if c.correctMass else ()))
+                + ((self._MASS,) if c.correctMass else ())
+                + ((self._VOLUME_RATE, self._VOLUME_ONLY_RATE) if c.consistentContinuity else ()))
 
     def advection_velocity(self, run, *U):
         """Positions move with U + delta_u of the last pre-pass (walls: unchanged); ``U`` the
@@ -557,11 +626,13 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
     @property
     def after_rates(self):
         c = self.coeffs
-        return self._add_rates if (c.correctVelocity or c.correctDensity) else None
+        return (self._add_rates if (c.correctVelocity or c.correctDensity or c.consistentContinuity)
+                else None)
 
     @property
     def after_density_rate(self):
-        return self._add_density_rate if self.coeffs.correctDensity else None
+        c = self.coeffs
+        return self._add_density_rate if (c.correctDensity or c.consistentContinuity) else None
 
     @property
     def after_step(self):
@@ -583,11 +654,18 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
                 add_rate(acc, run.aux(k))
         if self.coeffs.correctDensity:
             add_rate(st.drho, run.aux(self._DENSITY_RATE.aux))
+        if self.coeffs.consistentContinuity:
+            add_fluid_rate(st.drho, run.aux(self._VOLUME_RATE.aux), st.kind)
 
     def _add_density_rate(self, run):
         """With ``correctDensity``: the density-only pass gets delta_u . grad rho too, from
-        the last pre-pass (whose delta_u moved the particles since)."""
-        add_rate(run.state.drho, run.aux(self._DENSITY_ONLY_RATE.aux))
+        the last pre-pass (whose delta_u moved the particles since); with
+        ``consistentContinuity`` the shift's terms of the last rates evaluation, the same way."""
+        if self.coeffs.correctDensity:
+            add_rate(run.state.drho, run.aux(self._DENSITY_ONLY_RATE.aux))
+        else:
+            add_fluid_rate(run.state.drho, run.aux(self._VOLUME_ONLY_RATE.aux),
+                           run.state.kind)
 
 
 @register

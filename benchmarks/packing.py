@@ -1,0 +1,135 @@
+"""The particles' packing against their volumes in still water (issue 35, the flume's drift).
+
+Clones the flume tutorial (``tutorials/solitaryWave``, its models as shipped) into a still
+tank: the same depth d = 0.5 m, ``--length`` m long, walls on the bed and both ends, no
+paddle, no function objects, at ``--dx``; runs it to ``--end`` on one thread and reports at
+every written time
+
+* **fraction**: the bulk's fluid fraction sum_b V_b W(x - x_b), V_b = m_b / rho_b, at a grid
+  of points 0.1-0.35 m above the bed and 0.15 L-0.85 L along (1 where the particles take up
+  the room their volumes say; above 1 where they pack closer);
+* **level**: the water's height by its volumes, sum V_b / L, and by its particles, the mean
+  over the middle columns (dx wide) of the highest particle + dx/2;
+* **u_rms**: the fluid's rms speed (the stirring of still water);
+* **drho/dz**: the bulk density's slope (0.1-0.4 m) against the Tait equation's hydrostatic
+  one at the same density, T(3.27) differentiated: rho0 g / (c0^2 (rho/rho0)^(gamma-1)).
+
+    NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD python benchmarks/packing.py --dx 0.0125
+    NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD python benchmarks/packing.py --dx 0.0125 \\
+        --edit "constant/sphProperties:particleShifting={'type': 'none'}"
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEPTH = 0.5
+
+
+def _value(text):
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def still_tank(dx, length, end, write, edits=None, keep=None):
+    """Clone the flume tutorial into the still tank; return its folder."""
+    import sphfoam
+
+    e = {"system/particleDict:dx": dx,
+         "system/particleDict:fluid": {"water": {"type": "box", "min": [0, 0],
+                                                 "max": [length, DEPTH]}},
+         "system/particleDict:walls": {"tank": {"type": "box", "min": [0, 0],
+                                                "max": [length, 1.6 * DEPTH], "layers": 3,
+                                                "open": ["top"]}},
+         "system/controlDict:endTime": end, "system/controlDict:writeInterval": write,
+         "system/controlDict:functions": {}}
+    e.update(edits or {})
+    dst = Path(keep) if keep else Path(tempfile.mkdtemp(prefix="packing-")) / "stillTank"
+    # the flume's metrics read its gauges, which the still tank does not have
+    case = sphfoam.clone_case(ROOT / "tutorials" / "solitaryWave", dst, e)
+    (Path(dst) / "system" / "metricsDict").unlink(missing_ok=True)
+    return case, dst
+
+
+def measure_time(case, dst, t, length):
+    """The row of one written time (see the module docstring)."""
+    from scipy.spatial import cKDTree
+
+    from sphfoam import api
+
+    kern, ctx = case.models.sph["kernel"], case.context
+    h, dx = ctx.h, ctx.dx
+    reach, alpha = float(kern.support) * h, kern.alpha(2) / h ** 2
+    s = api.read_time(dst, t)
+    f = s["type"] == 0
+    x, rho = s["positions"][f], s["rho"][f]
+    V = s["mass"][f] / rho
+    tree = cKDTree(x)
+    frac = []
+    for px in np.linspace(0.15 * length, 0.85 * length, 15):
+        for py in np.linspace(0.1, 0.35, 6):
+            idx = tree.query_ball_point((px, py), reach)
+            q = np.linalg.norm(x[idx] - (px, py), axis=1) / h
+            frac.append(float((V[idx] * alpha * np.array([kern.f(v) for v in q])).sum()))
+    cols = np.floor(x[:, 0] / dx).astype(int)
+    mid = [c for c in np.unique(cols) if 3 <= c < round(length / dx) - 3]
+    top = np.array([x[cols == c, 1].max() for c in mid]) + 0.5 * dx
+    u = s["U"][f]
+    bulk = (x[:, 1] > 0.1) & (x[:, 1] < 0.4) & (x[:, 0] > 0.1 * length) & (x[:, 0] < 0.9 * length)
+    slope, icpt = np.polyfit(x[bulk, 1], rho[bulk], 1)
+    eos = case.models.sph["equationOfState"]
+    gamma = float(getattr(eos.coeffs, "gamma", 1.0))
+    r = (slope * 0.25 + icpt) / ctx.rho0
+    hydro = -ctx.rho0 * abs(ctx.g[-1]) / (ctx.c0 ** 2 * r ** (gamma - 1.0))
+    return {"t": t, "fraction": round(float(np.mean(frac)), 5),
+            "level_volume": round(float(V.sum() / length), 5),
+            "level_particles": round(float(top.mean()), 5),
+            "u_rms": round(float(np.sqrt((u ** 2).sum(axis=1).mean())), 5),
+            "drho_dz_ratio": round(float(slope / hydro), 4)}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--dx", type=float, default=0.0125, help="d/dx = 0.5/dx (0.0125: 40)")
+    ap.add_argument("--length", type=float, default=1.0)
+    ap.add_argument("--end", type=float, default=5.0)
+    ap.add_argument("--write", type=float, default=1.0)
+    ap.add_argument("--edit", action="append", default=[], metavar="FILE:KEY=VALUE")
+    ap.add_argument("--keep", default=None, help="run in this folder and keep it")
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args(argv)
+    import sphfoam
+
+    edits = {}
+    for s in a.edit:
+        k, v = s.split("=", 1)
+        edits[k] = _value(v)
+    case, dst = still_tank(a.dx, a.length, a.end, a.write, edits, a.keep)
+    sphfoam.run(case)
+    times = np.arange(0.0, a.end + 1e-9, a.write)
+    rows = [measure_time(case, dst, float(round(t, 9)), a.length) for t in times]
+    if a.json:
+        print(json.dumps({"dx": a.dx, "length": a.length, "edits": edits, "rows": rows}))
+    else:
+        print(f"still tank {a.length} m x {DEPTH} m, dx {a.dx} (d/dx {DEPTH / a.dx:g}), "
+              f"edits {edits or 'none'}: {dst}")
+        print(f"{'t':>5} {'fraction':>9} {'level V':>8} {'level p':>8} {'u_rms':>7} "
+              f"{'drho/dz':>8}")
+        for r in rows:
+            print(f"{r['t']:5.2f} {r['fraction']:9.4f} {r['level_volume']:8.4f} "
+                  f"{r['level_particles']:8.4f} {r['u_rms']:7.4f} {r['drho_dz_ratio']:8.4f}")
+    return rows
+
+
+if __name__ == "__main__":
+    sys.exit(main() and 0)
