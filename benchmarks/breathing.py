@@ -60,6 +60,16 @@ def _value(text):
         return text
 
 
+def parse_edits(items):
+    """``--edit FILE:KEY=VALUE`` arguments as clone_case's edits: VALUE a Python literal
+    (a number, a list, a dict) or else the string itself."""
+    edits = {}
+    for s in items:
+        k, v = s.split("=", 1)
+        edits[k] = _value(v)
+    return edits
+
+
 def measure(tutorial, end=2.0, every=0.01, edits=None, surface="fraction", keep=None,
             echo=None, gauges=()):
     """Run ``tutorial`` (a name under tutorials/ or a path) with ``edits`` to ``end`` and
@@ -100,10 +110,7 @@ def main(argv=None):
                     help="also wave gauges at these x (m), e.g. in still water")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
-    edits = {}
-    for s in a.edit:
-        k, v = s.split("=", 1)
-        edits[k] = _value(v)
+    edits = parse_edits(a.edit)
     t, xc, ec, dst = measure(a.tutorial, a.end, a.every, edits, a.surface, a.keep,
                              gauges=a.gauges)
     if a.height is None:

@@ -22,7 +22,6 @@ every written time
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 import sys
 import tempfile
@@ -30,15 +29,11 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from breathing import parse_edits  # noqa: E402  (a sibling script's --edit parsing)
+
 ROOT = Path(__file__).resolve().parents[1]
 DEPTH = 0.5
-
-
-def _value(text):
-    try:
-        return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
-        return text
 
 
 def still_tank(dx, length, end, write, edits=None, keep=None):
@@ -110,10 +105,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     import sphfoam
 
-    edits = {}
-    for s in a.edit:
-        k, v = s.split("=", 1)
-        edits[k] = _value(v)
+    edits = parse_edits(a.edit)
     case, dst = still_tank(a.dx, a.length, a.end, a.write, edits, a.keep)
     sphfoam.run(case)
     times = np.arange(0.0, a.end + 1e-9, a.write)

@@ -193,19 +193,12 @@ class _ShiftCoeffs(Coeffs):
 
 
 @njit(parallel=True, cache=True, fastmath=set(FASTMATH))
-def add_mass(m, mdot, kind, dt):
-    """m_a += dt dm_a/dt for the fluid particles (kind 0); walls keep theirs."""
-    for a in prange(m.shape[0]):
+def add_to_fluid(target, rate, kind, dt):
+    """target_a += dt rate_a for the fluid particles (kind 0); walls keep theirs (the mass
+    correctMass carries, dt the step; the density rate of consistentContinuity, dt 1)."""
+    for a in prange(target.shape[0]):
         if kind[a] == 0:
-            m[a] += dt * mdot[a]
-
-
-@njit(parallel=True, cache=True, fastmath=set(FASTMATH))
-def add_fluid_rate(rate, extra, kind):
-    """rate_a += extra_a for the fluid particles (kind 0); walls keep theirs."""
-    for a in prange(rate.shape[0]):
-        if kind[a] == 0:
-            rate[a] += extra[a]
+            target[a] += dt * rate[a]
 
 
 def _sum_names(init: str) -> tuple[str, ...]:
@@ -487,16 +480,16 @@ aux[I_shift_mdot, a] = m[a] / rhoa * shift_mf
     _CONSISTENT_INIT = """\
 shift_va@ = aux[I_shift_dU@, a]
 shift_fa@ = rhoa * shift_va@
-shift_dv = 0.0
+shift_drc = 0.0
 """
     _CONSISTENT_PAIR = """\
 shift_vb@ = aux[I_shift_dU@, b]
 shift_w@ = shift_va@ - shift_vb@
 shift_f@ = shift_fa@ + rhob * shift_vb@
-shift_dv += mb * (dot(shift_w@, gW@) + dot(shift_f@, gW@) / rhob)
+shift_drc += mb * (dot(shift_w@, gW@) + dot(shift_f@, gW@) / rhob)
 """
     _CONSISTENT_FINAL = """\
-aux[I_shift_dvol, a] = shift_dv
+aux[I_shift_drho_cont, a] = shift_drc
 """
 
     def imports(self):
@@ -587,7 +580,7 @@ aux[I_shift_dvol, a] = shift_dv
             terms.append(Term("shiftContinuity", ("rates",), init=self._CONSISTENT_INIT,
                               pair=self._CONSISTENT_PAIR, final=self._CONSISTENT_FINAL,
                               reads=("gradW", *self._DU),
-                              writes=("aux.shift_dvol",), dims=(2,)))
+                              writes=("aux.shift_drho_cont",), dims=(2,)))
         return terms
 
     @property
@@ -603,8 +596,9 @@ aux[I_shift_dvol, a] = shift_dv
     _DENSITY_RATE = AuxAddition("after_rates", "drho", "shift_drho")
     _DENSITY_ONLY_RATE = AuxAddition("after_density_rate", "drho", "shift_drho")
     _MASS = AuxAddition("after_step", "m", "shift_mdot", fluid_only=True)
-    _VOLUME_RATE = AuxAddition("after_rates", "drho", "shift_dvol", fluid_only=True)
-    _VOLUME_ONLY_RATE = AuxAddition("after_density_rate", "drho", "shift_dvol",
+    _CONTINUITY_RATE = AuxAddition("after_rates", "drho", "shift_drho_cont",
+                                   fluid_only=True)
+    _CONTINUITY_ONLY_RATE = AuxAddition("after_density_rate", "drho", "shift_drho_cont",
                                     fluid_only=True)
 
     def device_forms(self):
@@ -613,7 +607,8 @@ aux[I_shift_dvol, a] = shift_dv
                 + ((self._VELOCITY_RATE,) if c.correctVelocity else ())
                 + ((self._DENSITY_RATE, self._DENSITY_ONLY_RATE) if c.correctDensity else ())
                 + ((self._MASS,) if c.correctMass else ())
-                + ((self._VOLUME_RATE, self._VOLUME_ONLY_RATE) if c.consistentContinuity else ()))
+                + ((self._CONTINUITY_RATE, self._CONTINUITY_ONLY_RATE)
+                   if c.consistentContinuity else ()))
 
     def advection_velocity(self, run, *U):
         """Positions move with U + delta_u of the last pre-pass (walls: unchanged); ``U`` the
@@ -626,8 +621,8 @@ aux[I_shift_dvol, a] = shift_dv
     @property
     def after_rates(self):
         c = self.coeffs
-        return (self._add_rates if (c.correctVelocity or c.correctDensity or c.consistentContinuity)
-                else None)
+        on = c.correctVelocity or c.correctDensity or c.consistentContinuity
+        return self._add_rates if on else None
 
     @property
     def after_density_rate(self):
@@ -641,7 +636,7 @@ aux[I_shift_dvol, a] = shift_dv
     def _carry_mass(self, run):
         """With ``correctMass``: m_a += dt dm_a/dt, the mass flux of the step's last rates
         evaluation over the step just taken (zero for walls)."""
-        add_mass(run.state.m, run.aux(self._MASS.aux), run.state.kind, run.last_dt)
+        add_to_fluid(run.state.m, run.aux(self._MASS.aux), run.state.kind, run.last_dt)
 
     def _add_rates(self, run):
         """With ``correctVelocity``: du_a/dt += (delta_u_a . grad) u_a; with
@@ -655,7 +650,7 @@ aux[I_shift_dvol, a] = shift_dv
         if self.coeffs.correctDensity:
             add_rate(st.drho, run.aux(self._DENSITY_RATE.aux))
         if self.coeffs.consistentContinuity:
-            add_fluid_rate(st.drho, run.aux(self._VOLUME_RATE.aux), st.kind)
+            add_to_fluid(st.drho, run.aux(self._CONTINUITY_RATE.aux), st.kind, 1.0)
 
     def _add_density_rate(self, run):
         """With ``correctDensity``: the density-only pass gets delta_u . grad rho too, from
@@ -663,9 +658,9 @@ aux[I_shift_dvol, a] = shift_dv
         ``consistentContinuity`` the shift's terms of the last rates evaluation, the same way."""
         if self.coeffs.correctDensity:
             add_rate(run.state.drho, run.aux(self._DENSITY_ONLY_RATE.aux))
-        else:
-            add_fluid_rate(run.state.drho, run.aux(self._VOLUME_ONLY_RATE.aux),
-                           run.state.kind)
+        if self.coeffs.consistentContinuity:
+            add_to_fluid(run.state.drho, run.aux(self._CONTINUITY_ONLY_RATE.aux),
+                         run.state.kind, 1.0)
 
 
 @register
