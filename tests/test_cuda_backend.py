@@ -124,6 +124,10 @@ HOOK_CASES = [
         "system/sphSchemes:integrator": {"type": "monaghan2007"},
         "constant/sphProperties:particleShifting": {
             "type": "deltaPlusShifting", "surfaceLambda": 0, "consistentContinuity": "yes"}}),
+    # Fourtakas et al.'s diffusion over the fluid alone (walls no): its pair term sees the
+    # fluid and ghosts only
+    ("damBreakMatched", 0.2, 3, {
+        "constant/sphProperties:densityFilter": {"type": "fourtakasDeltaSPH", "walls": "no"}}),
     pytest.param("turbulentChannel", None, 3, _CHANNEL, marks=_SLOW),
     # Adami's walls on a 3 m flume with the paddle's motion: its wall entry's velocity put
     # back on the paddle's particles (walls_moved), 35 s

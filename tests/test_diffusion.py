@@ -292,3 +292,45 @@ def test_hydrostatic_tank_at_rest_stays_at_rest(tutorial):
     spurious = {k: float(np.abs(U[k] - U["none"]).max()) for k in ("deltaSPH",
                                                                     "fourtakasDeltaSPH")}
     assert spurious["fourtakasDeltaSPH"] < 0.8 * spurious["deltaSPH"], spurious
+
+
+# --- the walls as neighbours of the diffusion (walls yes / no) ------------------------------
+def _fluid_over_wall(setup, wall_rho):
+    """drho/dt of a fluid lattice at rest (uniform rho0) over three rows of still wall
+    particles of density wall_rho: the continuity term is zero, drho is the diffusion's."""
+    xs = (np.arange(N) + 0.5) * DX
+    X, Y = np.meshgrid(xs, np.concatenate([-(np.arange(3) + 0.5) * DX, xs]))
+    x, y = X.ravel(), Y.ravel()
+    n = x.size
+    kind = (y < 0).astype(np.int64)
+    st = ParticleState(x, y, np.zeros(n), np.zeros(n), np.where(kind == 1, wall_rho, RHO0),
+                       np.full(n, RHO0 * DX * DX), kind)
+    sim = Simulation(st, setup.pipe, registry.build("integrator", {"type": "monaghan2007"}),
+                     h=setup.h, support=setup.kernel.support, domain_lo=(-5 * DX, -5 * DX),
+                     domain_hi=((N + 2) * DX, (N + 2) * DX), beta=0.2,
+                     force_condition=True, adjust_time_step=True, delta_t=1e-4)
+    sim.neighbour_update()
+    sim.eos()
+    sim.rates()
+    return sim.state
+
+
+@pytest.mark.parametrize("filt", ["deltaSPH", "fourtakasDeltaSPH"])
+def test_walls_no_keeps_the_diffusion_within_the_fluid(filt):
+    """``walls yes`` (the default): a fluid at rest and uniform density over denser wall
+    particles gains density from them in the rows within the kernel's reach of the wall (the
+    first row by about delta h c0 (rho_w - rho0) / dx; the walls' own rates get nothing, so the fluid's sum of V drho is not zero); ``walls no``:
+    fluid neighbours only, so the uniform fluid has no diffusion at all (to round-off) and
+    its sum of V drho is zero."""
+    wall_rho = 1.01 * RHO0
+    with_walls = _fluid_over_wall(Setup({"type": filt}), wall_rho)
+    without = _fluid_over_wall(Setup({"type": filt, "walls": False}), wall_rho)
+    fluid = with_walls.kind == 0
+    scale = 0.1 * HDX * DX * C0 * (wall_rho - RHO0) / DX       # delta h c0 drho / dx
+    V = with_walls.m / with_walls.rho
+    first, second = fluid & (with_walls.y < DX), fluid & (abs(with_walls.y - 1.5 * DX) < 0.1)
+    assert np.all(with_walls.drho[first] > 0.3 * scale)
+    assert np.all(with_walls.drho[second] > 0.0)
+    assert np.sum((V * with_walls.drho)[fluid]) > 0.1 * scale * N * DX * DX
+    assert np.all(with_walls.drho[~fluid] == 0.0)
+    assert np.abs(without.drho).max() < 1e-9 * scale

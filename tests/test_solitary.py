@@ -308,7 +308,15 @@ def test_packing_benchmark_reads_a_still_tank(tmp_path):
     from the flume tutorial at d/dx = 10 and run for 0.1 s, reads at t = 0 the set-up's own
     state: the bulk's fluid fraction 1 within 0.1 %, the level 0.5 m by the volumes and by
     the particles, no motion, the bulk density's slope the Tait equation's hydrostatic one
-    within 0.5 %; at 0.1 s the water has barely moved (rms speed below 2 cm/s)."""
+    within 0.5 %; at 0.1 s the water has barely moved (rms speed below 2 cm/s).
+
+    Its budget (``--budget``) at t = 0: the lattice is not shifted (the shift's rate of the
+    kernel sums below 1e-5 /s), and Fourtakas et al.'s filter, whose hydrostatic reference is
+    linear in the pair's depth difference about p = 0, leaves on the Tait column the
+    diffusion of its curvature: D/rho = delta h c0 rho''/rho with rho = rho0 (1 + gamma g
+    d / c0^2)^(1/gamma), T(3.27), i.e. rho''/rho = -(gamma - 1) (g/c0^2)^2 (1 + gamma g d /
+    c0^2)^-2, within 5 % over the bulk's depths (a wrong sign, factor h or c0, or a reference
+    that cancelled the curvature, is off by 100 % or more)."""
     import importlib.util
     from pathlib import Path
 
@@ -317,7 +325,7 @@ def test_packing_benchmark_reads_a_still_tank(tmp_path):
     packing = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(packing)
     rows = packing.main(["--dx", "0.05", "--end", "0.1", "--write", "0.1",
-                         "--keep", str(tmp_path / "tank"), "--json"])
+                         "--keep", str(tmp_path / "tank"), "--json", "--budget"])
     first, last = rows[0], rows[-1]
     assert first["t"] == 0.0 and abs(last["t"] - 0.1) < 1e-9
     assert abs(first["fraction"] - 1.0) < 1e-3, first
@@ -325,3 +333,12 @@ def test_packing_benchmark_reads_a_still_tank(tmp_path):
     assert first["u_rms"] == 0.0
     assert abs(first["drho_dz_ratio"] - 1.0) < 5e-3, first
     assert 0.0 < last["u_rms"] < 0.02, last
+    case = Case(tmp_path / "tank")
+    case.validate()
+    ctx, gamma, g = case.context, 7.0, 9.81
+    assert case.models.sph["densityFilter"].coeffs.delta == 0.1
+    d = np.linspace(0.15, 0.4, 101)                  # the bulk's depths (0.1-0.35 m up)
+    curv = -(gamma - 1) * (g / ctx.c0 ** 2) ** 2 / (1 + gamma * g * d / ctx.c0 ** 2) ** 2
+    expected = 0.1 * ctx.h * ctx.c0 * curv.mean()
+    assert abs(first["shift_rate"]) < 1e-5, first
+    assert abs(first["filter_rate"] / expected - 1.0) < 0.05, (first, expected)

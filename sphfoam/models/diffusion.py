@@ -24,7 +24,7 @@ from pydantic import Field
 
 from sphfoam.engine.terms import Term
 from sphfoam.models.base import CaseContext
-from sphfoam.models.filters import DensityFilter
+from sphfoam.models.filters import WALLS_DOC, DensityFilter, diffusion_sees
 from sphfoam.registry import Coeffs, register
 
 #: |y| up to which the hydrostatic density differences below are the binomial series (a
@@ -260,10 +260,18 @@ class FourtakasDeltaSPH(DensityFilter):
       (its mass rate is of second order in x).
 
     Both agree to first order in x (x ~ dx / (gamma H) is small) and are exact for gamma = 1
-    (the linear equation of state). A fluid at hydrostatic rest has rho^D uniform, so the term
-    vanishes there, at the free surface and the bottom too, where the plain term diffuses the
-    hydrostatic gradient across the truncated support and drives a spurious flow. ``gamma``
-    must be the equation of state's exponent (7 for the Tait default, 1 for a linear law).
+    (the linear equation of state). Both take the pressures about p = 0, so the difference is
+    the hydrostatic one at the free surface: in a fluid at hydrostatic rest rho^D is uniform
+    to first order, so the term vanishes at the free surface and the bottom too, where the
+    plain term diffuses the hydrostatic gradient across the truncated support and drives a
+    spurious flow. What it leaves (gamma > 1) is the Tait column's curvature, whose slope
+    falls with depth as (rho/rho0)^(1 - gamma): D/rho = delta h c0 rho''/rho, rho''/rho =
+    -(gamma - 1) (g/c0^2)^2 (1 + gamma g d / c0^2)^-2 at depth d, -2.2e-4 /s at d/dx = 10 and
+    -5.5e-5 /s at 40 in the flume tutorial's still water (``benchmarks/packing.py
+    --budget``, tests/test_solitary.py). ``gamma`` must be the equation of state's exponent
+    (7 for the Tait default, 1 for a linear law). Wall particles are neighbours with their
+    own density and get no diffusion themselves (``walls yes``); ``walls no`` keeps the term
+    within the fluid (and mirrored ghosts): see ``deltaSPH``.
     """
 
     name = "fourtakasDeltaSPH"
@@ -277,6 +285,7 @@ class FourtakasDeltaSPH(DensityFilter):
         reference: str = Field("midpoint", pattern="^(midpoint|particle)$", description=(
             "midpoint: the pair's hydrostatic density difference about its mid-depth "
             "(antisymmetric, conserves mass); particle: the paper's form with a as reference"))
+        walls: bool = Field(True, description=WALLS_DOC)
 
     #: rho^H_a - rho^H_b = rho0 y P(y^2), y = x / 2 (:func:`hydrostatic_coefficients`), in
     #: the loop (a call with a branch to the powers costs as much as the rest of the loop)
@@ -331,4 +340,4 @@ drho_b -= filt_dc0 * h * filt_psi_b * ma / rhoa
         return [Term("hydrostaticDensityDiffusion", ("rates", "density"),
                      pair=self._MIDPOINT if mid else self._PARTICLE,
                      reaction=self._MIDPOINT_REACTION if mid else "",
-                     reads=("gradW",), writes=("drho",))]
+                     reads=("gradW",), writes=("drho",), **diffusion_sees(self.coeffs.walls))]

@@ -211,6 +211,21 @@ def _mls_3d(part: str) -> str:
     return "\n".join(out) + "\n"
 
 
+#: the ``walls`` option of the delta-SPH filters that diffuse the density over the walls
+WALLS_DOC = (
+    "yes (the default): wall particles (stationary ghosts, Adami's walls) are neighbours of "
+    "the diffusion with their own density, which the term does not change, so each "
+    "fluid-wall pair moves density into or out of the fluid; no: fluid neighbours (and "
+    "mirrored ghosts) only, so the pair terms cancel over the fluid and its sum of V rho is "
+    "unchanged by them (at a wall the support is then truncated, as at the free surface)")
+
+
+def diffusion_sees(walls: bool) -> dict:
+    """The neighbours a delta-SPH pair term sees: the default's (fluid, ghosts, wet walls),
+    or with ``walls no`` the fluid and mirrored ghosts only."""
+    return {} if walls else {"sees": ("fluid", "ghost")}
+
+
 @register
 class DeltaSPH(DensityFilter):
     """delta-SPH density diffusion of Molteni & Colagrossi (2009), added to drho_a/dt at every
@@ -221,7 +236,8 @@ class DeltaSPH(DensityFilter):
     Since r_ab . grad_a W_ab < 0, a particle denser than its neighbours loses density; the
     pair term is antisymmetric, so sum_a V_a drho_a is unchanged by it. eta^2 = (0.1 h)^2 is
     the guard of T(3.32). Wall neighbours take part with their own density; wall particles'
-    rates get no diffusion.
+    rates get no diffusion (``walls no``: fluid neighbours and mirrored ghosts only, see
+    :data:`WALLS_DOC`).
     """
 
     name = "deltaSPH"
@@ -231,6 +247,7 @@ class DeltaSPH(DensityFilter):
     class Coeffs(Coeffs):
         delta: float = Field(0.1, ge=0.0, description="dimensionless diffusion coefficient "
                              "delta (0.1 in Molteni & Colagrossi 2009)")
+        walls: bool = Field(True, description=WALLS_DOC)
 
     def params(self, ctx: CaseContext):
         if not ctx.c0 > 0.0:
@@ -240,7 +257,7 @@ class DeltaSPH(DensityFilter):
 
     def terms(self):
         return [Term("densityDiffusion", ("rates", "density"), reads=("gradW",),
-                     writes=("drho",), pair=(
+                     writes=("drho",), **diffusion_sees(self.coeffs.walls), pair=(
                          "filt_psi = 2.0 * (rhoa - rhob) * dot(d@_ab, gW@) / "
                          "(r2 + eta2)\n"
                          "drho_a += filt_dc0 * h * filt_psi * mb / rhob\n"))]
