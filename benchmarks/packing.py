@@ -27,8 +27,9 @@ through the continuity equation, so it does not):
   filter minus the rates with its strength delta c0 set to 0, on the written state; 0 for
   a periodic filter or none);
 * **budget**: shift - filter, the rate of ln(fraction) they make, to compare with the
-  fraction's own change between written times (**observed**). Snapshots are noisy (the still water is
-  stirred at a few cm/s): average over many (``--write 0.05``).
+  fraction's own change between written times (printed at the end for the second half).
+  Single states are noisy (the still water is stirred at a few cm/s): average over many
+  (``--write 0.05``).
 
     NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD python benchmarks/packing.py --dx 0.0125
     NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD python benchmarks/packing.py --dx 0.0125 \\

@@ -319,9 +319,9 @@ def _fluid_over_wall(setup, wall_rho):
 def test_walls_no_keeps_the_diffusion_within_the_fluid(filt):
     """``walls yes`` (the default): a fluid at rest and uniform density over denser wall
     particles gains density from them in the rows within the kernel's reach of the wall (the
-    first row by about delta h c0 (rho_w - rho0) / dx; the walls' own rates get nothing, so the fluid's sum of V drho is not zero); ``walls no``:
-    fluid neighbours only, so the uniform fluid has no diffusion at all (to round-off) and
-    its sum of V drho is zero."""
+    first row by about delta h c0 (rho_w - rho0) / dx; the walls' own rates get nothing, so
+    the fluid's sum of V drho is not zero); ``walls no``: fluid neighbours only, so the
+    uniform fluid has no diffusion at all (to round-off) and its sum of V drho is zero."""
     wall_rho = 1.01 * RHO0
     with_walls = _fluid_over_wall(Setup({"type": filt}), wall_rho)
     without = _fluid_over_wall(Setup({"type": filt, "walls": False}), wall_rho)

@@ -266,12 +266,12 @@ class FourtakasDeltaSPH(DensityFilter):
     plain term diffuses the hydrostatic gradient across the truncated support and drives a
     spurious flow. What it leaves (gamma > 1) is the Tait column's curvature, whose slope
     falls with depth as (rho/rho0)^(1 - gamma): D/rho = delta h c0 rho''/rho, rho''/rho =
-    -(gamma - 1) (g/c0^2)^2 (1 + gamma g d / c0^2)^-2 at depth d, -2.2e-4 /s at d/dx = 10 and
-    -5.5e-5 /s at 40 in the flume tutorial's still water (``benchmarks/packing.py
-    --budget``, tests/test_solitary.py). ``gamma`` must be the equation of state's exponent
-    (7 for the Tait default, 1 for a linear law). Wall particles are neighbours with their
-    own density and get no diffusion themselves (``walls yes``); ``walls no`` keeps the term
-    within the fluid (and mirrored ghosts): see ``deltaSPH``.
+    -(gamma - 1) (g/c0^2)^2 (1 + gamma g d / c0^2)^-2 at depth d (checked with
+    ``benchmarks/packing.py --budget`` in tests/test_solitary.py; its size against the
+    packing drift's in docs/low-dissipation.md). ``gamma`` must be the equation of state's
+    exponent (7 for the Tait default, 1 for a linear law). Wall particles are neighbours
+    with their own density and get no diffusion themselves (``walls yes``); ``walls no``
+    keeps the term within the fluid (and mirrored ghosts): see ``deltaSPH``.
     """
 
     name = "fourtakasDeltaSPH"

@@ -106,10 +106,9 @@ delta_u . grad rho in the continuum, and the first alone is unstable at walls an
 water), over the neighbours the continuity sees (a wall's delta_u is 0), summed in the rates
 pass and added after the rates and after the density-only pass (from the last rates
 evaluation). It stops the packing drift of the density diffusion with the shift in still
-water at d/dx = 20 over 10 s; at d/dx = 40 the water's density then rises from 3 s and
-blows up by 9 s where the density filter diffuses over the wall particles (its default), and
-stays at rest over 8 s where it diffuses over the fluid alone (``walls no``;
-docs/low-dissipation.md, *The packing drift in still water* and *What packs the
+water; at d/dx = 40 it needs the density filter to diffuse over the fluid alone (``walls
+no``), without which the water's density rises and the run blows up
+(docs/low-dissipation.md, *The packing drift in still water* and *What packs the
 particles*). Not with ``correctDensity`` or ``correctMass``.
 """
 
@@ -169,9 +168,8 @@ class _ShiftCoeffs(Coeffs):
         "position gives it) + sum_b V_b (rho_a delta_u_a + rho_b delta_u_b) . grad_a W_ab "
         "(div(rho delta_u), the shift's mass flux kept in the density), over the "
         "continuity's neighbours (walls' delta_u = 0). no (the default): the shift moves the "
-        "particles but not their densities. In still water it stops the packing drift at "
-        "d/dx = 20 and 40; at 40 it blows up after 9 s where the density filter diffuses over "
-        "the walls (walls yes), not with walls no (docs/low-dissipation.md)"))
+        "particles but not their densities. In still water it stops the packing drift; at "
+        "d/dx = 40 it needs the density filter's walls no (docs/low-dissipation.md)"))
     massFloor: float = Field(0.5, gt=0.0, lt=0.8, description=(
         "correctMass: the least mass of a fluid particle, as a fraction of rho0 dx^d; the "
         "mass a particle gives fades linearly to nothing from 1.2 massFloor down to "
