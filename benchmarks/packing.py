@@ -83,7 +83,7 @@ def measure_time(case, dst, t, length):
 
     kern, ctx = case.models.sph["kernel"], case.context
     h, dx = ctx.h, ctx.dx
-    reach, alpha = float(kern.support) * h, kern.alpha(2) / h ** 2
+    reach = float(kern.support) * h
     s = api.read_time(dst, t)
     f = s["type"] == 0
     x, rho = s["positions"][f], s["rho"][f]
@@ -93,8 +93,8 @@ def measure_time(case, dst, t, length):
     for px in np.linspace(0.15 * length, 0.85 * length, 15):
         for py in np.linspace(0.1, 0.35, 6):
             idx = tree.query_ball_point((px, py), reach)
-            q = np.linalg.norm(x[idx] - (px, py), axis=1) / h
-            frac.append(float((V[idx] * alpha * np.array([kern.f(v) for v in q])).sum()))
+            r = np.linalg.norm(x[idx] - (px, py), axis=1)
+            frac.append(float((V[idx] * kern.W(r, h)).sum()))
     cols = np.floor(x[:, 0] / dx).astype(int)
     mid = [c for c in np.unique(cols) if 3 <= c < round(length / dx) - 3]
     top = np.array([x[cols == c, 1].max() for c in mid]) + 0.5 * dx
@@ -124,9 +124,8 @@ def kernel_sums(kern, h, x, w, rows):
 
     tree = cKDTree(x)
     pairs = tree.sparse_distance_matrix(tree, float(kern.support) * h, output_type="coo_matrix")
-    f = np.vectorize(kern.f)
     # the self pair is kept (its distance, 0, is stored explicitly)
-    val = w[pairs.col] * kern.alpha(2) / h ** 2 * f(pairs.data / h)
+    val = w[pairs.col] * kern.W(pairs.data, h)
     return np.bincount(pairs.row, val, minlength=len(x))[rows]
 
 

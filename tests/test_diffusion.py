@@ -72,10 +72,15 @@ class Setup:
         x, y = X.ravel(), Y.ravel()
         n = x.size
         m = np.full(n, RHO0 * DX * DX) if m is None else m
-        st = ParticleState(x, y, np.zeros(n), np.zeros(n), rho_of_xy(x, y), m,
-                           np.zeros(n, dtype=np.int64))
+        return self.evaluated(ParticleState(x, y, np.zeros(n), np.zeros(n), rho_of_xy(x, y),
+                                            m, np.zeros(n, dtype=np.int64)))
+
+    def evaluated(self, st, below=2):
+        """The simulation of the state ``st`` with its rates evaluated once (its domain
+        ``below`` dx under the lattice)."""
         sim = Simulation(st, self.pipe, registry.build("integrator", {"type": "monaghan2007"}),
-                         h=self.h, support=self.kernel.support, domain_lo=(-2 * DX, -2 * DX),
+                         h=self.h, support=self.kernel.support,
+                         domain_lo=(-2 * DX, -below * DX),
                          domain_hi=((N + 2) * DX, (N + 2) * DX), beta=0.2,
                          force_condition=True, adjust_time_step=True, delta_t=1e-4)
         sim.neighbour_update()
@@ -305,14 +310,7 @@ def _fluid_over_wall(setup, wall_rho):
     kind = (y < 0).astype(np.int64)
     st = ParticleState(x, y, np.zeros(n), np.zeros(n), np.where(kind == 1, wall_rho, RHO0),
                        np.full(n, RHO0 * DX * DX), kind)
-    sim = Simulation(st, setup.pipe, registry.build("integrator", {"type": "monaghan2007"}),
-                     h=setup.h, support=setup.kernel.support, domain_lo=(-5 * DX, -5 * DX),
-                     domain_hi=((N + 2) * DX, (N + 2) * DX), beta=0.2,
-                     force_condition=True, adjust_time_step=True, delta_t=1e-4)
-    sim.neighbour_update()
-    sim.eos()
-    sim.rates()
-    return sim.state
+    return setup.evaluated(st, below=5).state
 
 
 @pytest.mark.parametrize("filt", ["deltaSPH", "fourtakasDeltaSPH"])
