@@ -495,6 +495,39 @@ def test_3d_repulsive_walls_push_along_each_face_normal_with_weights_summing_to_
     assert abs(a[1]) < 1e-9 * gamma(xs)
 
 
+def test_3d_block_faces_off_the_lattice_keep_their_first_layer(tmp_path):
+    """A block whose faces are not on the particle lattice (SPHERIC Test 2's container
+    model: its outer rows 0.9 dx behind the front face and 0.5 dx behind the sides): every
+    particle of a face's first layer takes that face's normal, so the front-side edges are
+    edges (two normals), not side faces only (free-slip Adami walls mirror the normal
+    components; with the front's missing there, the water's approach was not mirrored)."""
+    from sphfoam.setup.initial import generate_case
+
+    dx = 0.05
+    case = _copy(tmp_path)
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type hybrid;")
+    _particle_dict(case, f"""dimension 3; dx {dx};
+fluid {{ water {{ type box; min (0.4 0 0); max (0.6 0.6 0.2); }} }}
+walls
+{{
+    tank  {{ type box; min (0 0 0); max (0.6 0.6 0.4); layers 1; open top; }}
+    block {{ type block; min (0.1 0.2 0); max (0.27 0.4 0.15); layers 3; }}
+}}
+""")
+    st = generate_case(Case(case))
+    w = st.kind != 0
+    pos = np.column_stack(st.positions)[w]
+    n = np.column_stack([st.extra[k][w] for k in ("nx", "ny", "nz")])
+    block = (pos[:, 0] > 0.1) & (pos[:, 0] < 0.27) & (pos[:, 1] > 0.2) & (pos[:, 1] < 0.4) \
+        & (pos[:, 2] > 0)
+    front = block & np.isclose(pos[:, 0], pos[block, 0].max())
+    assert 0.27 - pos[front, 0].max() == pytest.approx(0.9 * dx)
+    assert front.sum() == 12 and (n[front][:, 0] == 1).all()
+    edge = front & ((pos[:, 1] == pos[block, 1].min()) | (pos[:, 1] == pos[block, 1].max()))
+    assert edge.sum() == 6 and (np.abs(n[edge][:, 1]) == 1).all()
+    assert np.array_equal(st.extra["corner"][w], np.abs(n).sum(axis=1) - 1)
+
+
 def test_3d_wall_geometry_of_a_tank_and_a_block_on_its_floor(tmp_path):
     """The set-up's 3-D wall normals for one row: a tank's faces, edges and vertices belong
     to one, two and three faces (the signs of their normals into the water); a block on the

@@ -432,3 +432,70 @@ def test_couette_start_up_with_adami_no_slip_walls(tmp_path):
     assert rows.shape[0] == 2
     (t2, *_, p2), (t5, *_, p5) = rows
     assert p2 < 11.0 and p5 < 7.5 and p5 < p2
+
+
+#: SPHERIC Test 2's section at y = 0.5 m (tutorials/damBreak3D made 2-D): a 0.55 m column
+#: released against the container model, a block 0.161 m square standing on the bed
+_BLOCK = ((0.6635, 0.0), (0.8245, 0.161))
+
+
+def _marin_section(tutorial, boundary: dict, end: float):
+    from sphfoam import api
+
+    case = tutorial("damBreak3D", {
+        "system/particleDict:dimension": 2,
+        "system/particleDict:fluid.reservoir": {"type": "box", "min": [1.992, 0],
+                                                "max": [3.22, 0.55]},
+        "system/particleDict:walls.tank": {"type": "box", "min": [0, 0], "max": [3.22, 1],
+                                           "layers": 3, "open": ["top"]},
+        "system/particleDict:walls.box": {"type": "block", "min": list(_BLOCK[0]),
+                                          "max": list(_BLOCK[1]), "layers": 3},
+        "constant/g:value": [0, -9.81],
+        "constant/sphProperties:boundary": boundary,
+        "system/controlDict:functions": {},
+        "system/controlDict:endTime": end,
+        "system/controlDict:writeInterval": 0.05})
+    setup_case(Case(case), log=lambda m: None)
+    return case, api
+
+
+def _in_block(s, lo, hi):
+    x = s["positions"]
+    return (s["type"] == FLUID) & np.all((x >= lo) & (x <= hi), axis=1)
+
+
+def test_a_block_on_the_bed_takes_the_normals_of_its_own_faces(tutorial):
+    """Each wall particle's normal is that of the nearest wall line it lies behind, among
+    the faces the fluid can reach: the rows of a block standing on the bed lie in front of
+    the bed's line (and behind the block's bottom face, which the bed covers), so they take
+    the block's side or top faces' normals, not the bed's. (They took the bed's +y on the
+    block's lowest row and on rows nearer the bed than a side face; free-slip Adami walls
+    then mirrored the wrong component and let water into the block.)"""
+    case, api = _marin_section(tutorial, {"type": "adami", "noSlip": False}, 0.05)
+    s = api.read_time(case, 0)
+    P, n = s["positions"], np.column_stack([s["nx"], s["ny"]])
+    (x0, y0), (x1, y1) = _BLOCK
+    blk = (s["type"] == WALL) & (P[:, 0] > x0) & (P[:, 0] < x1) & (P[:, 1] > y0) \
+        & (P[:, 1] < y1)
+    assert blk.sum() == 16
+    d = np.column_stack([x1 - P[blk, 0], P[blk, 0] - x0, y1 - P[blk, 1]])
+    own = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])[np.argmin(d, axis=1)]
+    assert np.allclose(n[blk], own)
+    assert np.allclose(s["wallDist"][blk], d.min(axis=1))
+
+
+def test_free_slip_adami_walls_keep_the_water_out_of_a_block(tutorial):
+    """The section's surge (H/dx = 15) meets the block at 0.45 s: with free-slip Adami walls
+    no fluid particle enters the block's rows of wall particles to 0.8 s (with the bed's
+    normal on its lower rows 6-7 had by 0.7 s)."""
+    case, api = _marin_section(tutorial, {"type": "adami", "noSlip": False}, 0.8)
+    rep = run_case(case, progress=False, echo=None)
+    assert rep.removed == 0
+    s0 = api.read_time(case, 0)
+    P = s0["positions"]
+    blk = (s0["type"] == WALL) & np.all((P > _BLOCK[0]) & (P < _BLOCK[1]), axis=1)
+    lo, hi = P[blk].min(axis=0), P[blk].max(axis=0)
+    times = api.times(case)
+    assert times[-1] == pytest.approx(0.8)
+    assert [int(_in_block(api.read_time(case, t), lo, hi).sum()) for t in times] \
+        == [0] * len(times)

@@ -172,7 +172,8 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
     """Per wall particle of box tanks and block solids (axis-aligned plane faces): per axis,
     the sign of the normal (into the fluid) of each face the particle belongs to (nx, ny, nz:
     one nonzero on a face, two on an edge, three at a vertex; sphfoam.models.boundaries) and
-    ``corner``, the faces it belongs to less one. A block's face that lies on another wall (a
+    ``corner``, the faces it belongs to less one. A block's particle belongs to its nearest
+    faces and to every face whose first layer (less than dx behind it) it is in. A block's face that lies on another wall (a
     block standing on the tank's floor) is not a face. With ``support_radius``, ``nFull``:
     the lattice sites inside the support that are behind no wall, the pairs the particle
     forms fully submerged (T §3.9)."""
@@ -198,7 +199,10 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
                         depth[side, :, axis] = np.inf
             d = depth.min(axis=0)
             out = np.where(depth[1] < depth[0], 1.0, -1.0)
-            near = d <= d.min(axis=1)[:, None] + 0.25 * dx
+            # its nearest faces, and every face whose first layer it is in: a block's faces
+            # need not lie on the lattice, so an edge's column can be 0.5 dx behind one face
+            # and 0.9 dx behind the other
+            near = (d <= d.min(axis=1)[:, None] + 0.25 * dx) | (d < dx)
         n[sel] = np.where(near, out, 0.0)
         corner[sel] = np.maximum(near.sum(axis=1) - 1, 0)
     geo = {"nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2], "corner": corner}
