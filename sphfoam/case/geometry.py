@@ -144,9 +144,10 @@ def segments_of(pd: ParticleDict) -> list[Segment]:
 
 
 def _closest(segs: list[Segment], x: np.ndarray, y: np.ndarray,
-             eligible: np.ndarray | None = None):
-    """Nearest point on any segment: distance, point, segment index, whether it is an end.
-    ``eligible`` (segments x points, optional): which segments each point may take."""
+             exposed: np.ndarray | None = None, tol: float = 0.0):
+    """Nearest point on any segment: distance, point, segment index (-1 for none), whether
+    it is an end. With ``exposed`` (per segment), only the exposed segments whose line each
+    point lies behind or on (within ``tol``) are candidates for it."""
     best = np.full(x.size, np.inf)
     qx = np.zeros(x.size)
     qy = np.zeros(x.size)
@@ -160,8 +161,10 @@ def _closest(segs: list[Segment], x: np.ndarray, y: np.ndarray,
         px, py = s.p0[0] + tc * tx, s.p0[1] + tc * ty
         d = np.hypot(x - px, y - py)
         better = d < best - 1e-12 * max(L, 1.0)
-        if eligible is not None:
-            better &= eligible[i]
+        if exposed is not None:
+            if not exposed[i]:
+                continue
+            better &= (x - s.p0[0]) * s.normal[0] + (y - s.p0[1]) * s.normal[1] <= tol
         best = np.where(better, d, best)
         qx = np.where(better, px, qx)
         qy = np.where(better, py, qy)
@@ -198,30 +201,24 @@ def _exposed(segs: list[Segment], dx: float) -> np.ndarray:
     """Per segment, whether the fluid can reach it: a face whose midpoint, stepped off it
     along its normal, lies behind another segment touching it (a block's bottom face on the
     bed) is covered."""
-    out = np.ones(len(segs), bool)
+    if len(segs) < 2:
+        return np.ones(len(segs), bool)
     eps = 1e-3 * dx
-    for i, s in enumerate(segs):
-        others = segs[:i] + segs[i + 1:]
-        if not others:
-            continue
-        mx = 0.5 * (s.p0[0] + s.p1[0]) + eps * s.normal[0]
-        my = 0.5 * (s.p0[1] + s.p1[1]) + eps * s.normal[1]
-        d, qx, qy, j, _ = _closest(others, np.array([mx]), np.array([my]))
-        n = others[int(j[0])].normal
-        out[i] = not (d[0] < 0.5 * dx and (mx - qx[0]) * n[0] + (my - qy[0]) * n[1] < 0.0)
-    return out
-
-
-def _behind_exposed(segs: list[Segment], x: np.ndarray, y: np.ndarray,
-                    dx: float) -> np.ndarray:
-    """(segments x points) whether each point lies behind or on each exposed segment's line;
-    a point behind none may take any segment."""
-    tol = 1e-6 * dx
-    ok = np.array([(x - s.p0[0]) * s.normal[0] + (y - s.p0[1]) * s.normal[1] <= tol
-                   for s in segs]).reshape(len(segs), x.size)
-    ok &= _exposed(segs, dx)[:, None]
-    ok[:, ~ok.any(axis=0)] = True
-    return ok
+    mx = np.array([0.5 * (s.p0[0] + s.p1[0]) + eps * s.normal[0] for s in segs])
+    my = np.array([0.5 * (s.p0[1] + s.p1[1]) + eps * s.normal[1] for s in segs])
+    best = np.full(len(segs), np.inf)
+    covered = np.zeros(len(segs), bool)
+    own = np.arange(len(segs))
+    for i, s in enumerate(segs):           # each probe against every other segment
+        tx, ty = s.tangent
+        tc = np.clip((mx - s.p0[0]) * tx + (my - s.p0[1]) * ty, 0.0, s.length)
+        px, py = s.p0[0] + tc * tx, s.p0[1] + tc * ty
+        d = np.hypot(mx - px, my - py)
+        better = (d < best - 1e-12 * max(s.length, 1.0)) & (own != i)
+        best = np.where(better, d, best)
+        behind = (mx - px) * s.normal[0] + (my - py) * s.normal[1] < 0.0
+        covered = np.where(better, behind & (d < 0.5 * dx), covered)
+    return ~covered
 
 
 def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
@@ -232,7 +229,11 @@ def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
     line) among the faces open to the fluid (``_exposed``): the rows of a block standing
     on the bed lie in front of the bed's line and behind the block's bottom face, which
     the bed covers; neither is their wall."""
-    d, qx, qy, which, at_end = _closest(segs, x, y, _behind_exposed(segs, x, y, dx))
+    d, qx, qy, which, at_end = _closest(segs, x, y, _exposed(segs, dx), 1e-6 * dx)
+    none = which < 0                      # behind no exposed line: the nearest of all
+    if none.any():
+        d[none], qx[none], qy[none], which[none], at_end[none] = _closest(
+            segs, x[none], y[none])
     nx = np.zeros(x.size)
     ny = np.zeros(x.size)
     corner = np.zeros(x.size)
