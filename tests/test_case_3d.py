@@ -495,29 +495,39 @@ def test_3d_repulsive_walls_push_along_each_face_normal_with_weights_summing_to_
     assert abs(a[1]) < 1e-9 * gamma(xs)
 
 
+def _hybrid_walls(tmp_path, dx: float, fluid: str, block: str):
+    """A 3-D case with hybrid walls (the set-up writes every wall field) of a tank 0.6 x 0.6
+    x 0.4 m, one layer, open on top, the water box ``fluid`` and the ``block`` entry; set up:
+    (case, state, wall mask, wall positions, wall normals nx, ny, nz)."""
+    from sphfoam.setup.initial import generate_case
+
+    case = _copy(tmp_path)
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type hybrid;")
+    _particle_dict(case, f"""dimension 3; dx {dx};
+fluid {{ water {{ type box; {fluid} }} }}
+walls
+{{
+    tank  {{ type box; min (0 0 0); max (0.6 0.6 0.4); layers 1; open top; }}
+    block {{ type block; {block} }}
+}}
+""")
+    c = Case(case)
+    st = generate_case(c)
+    w = st.kind != 0
+    pos = np.column_stack(st.positions)[w]
+    n = np.column_stack([st.extra[k][w] for k in ("nx", "ny", "nz")])
+    return c, st, w, pos, n
+
+
 def test_3d_block_faces_off_the_lattice_keep_their_first_layer(tmp_path):
     """A block whose faces are not on the particle lattice (SPHERIC Test 2's container
     model: its outer rows 0.9 dx behind the front face and 0.5 dx behind the sides): every
     particle of a face's first layer takes that face's normal, so the front-side edges are
     edges (two normals), not side faces only (free-slip Adami walls mirror the normal
     components; with the front's missing there, the water's approach was not mirrored)."""
-    from sphfoam.setup.initial import generate_case
-
     dx = 0.05
-    case = _copy(tmp_path)
-    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type hybrid;")
-    _particle_dict(case, f"""dimension 3; dx {dx};
-fluid {{ water {{ type box; min (0.4 0 0); max (0.6 0.6 0.2); }} }}
-walls
-{{
-    tank  {{ type box; min (0 0 0); max (0.6 0.6 0.4); layers 1; open top; }}
-    block {{ type block; min (0.1 0.2 0); max (0.27 0.4 0.15); layers 3; }}
-}}
-""")
-    st = generate_case(Case(case))
-    w = st.kind != 0
-    pos = np.column_stack(st.positions)[w]
-    n = np.column_stack([st.extra[k][w] for k in ("nx", "ny", "nz")])
+    _, st, w, pos, n = _hybrid_walls(tmp_path, dx, "min (0.4 0 0); max (0.6 0.6 0.2);",
+                                     "min (0.1 0.2 0); max (0.27 0.4 0.15); layers 3;")
     block = (pos[:, 0] > 0.1) & (pos[:, 0] < 0.27) & (pos[:, 1] > 0.2) & (pos[:, 1] < 0.4) \
         & (pos[:, 2] > 0)
     front = block & np.isclose(pos[:, 0], pos[block, 0].max())
@@ -533,24 +543,9 @@ def test_3d_wall_geometry_of_a_tank_and_a_block_on_its_floor(tmp_path):
     to one, two and three faces (the signs of their normals into the water); a block on the
     floor has no bottom face (it stands on the tank); the hybrid wall's nFull counts the
     lattice sites in the support in front of the faces (a quarter space on an edge)."""
-    from sphfoam.setup.initial import generate_case
-
     dx = 0.05
-    case = _copy(tmp_path)
-    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type hybrid;")
-    _particle_dict(case, f"""dimension 3; dx {dx};
-fluid {{ water {{ type box; min (0 0 0); max (0.6 0.6 0.2); }} }}
-walls
-{{
-    tank  {{ type box; min (0 0 0); max (0.6 0.6 0.4); layers 1; open top; }}
-    block {{ type block; min (0.1 0.1 0); max (0.2 0.2 0.1); layers 1; }}
-}}
-""")
-    c = Case(case)
-    st = generate_case(c)
-    w = st.kind != 0
-    pos = np.column_stack(st.positions)[w]
-    n = np.column_stack([st.extra[k][w] for k in ("nx", "ny", "nz")])
+    c, st, w, pos, n = _hybrid_walls(tmp_path, dx, "min (0 0 0); max (0.6 0.6 0.2);",
+                                     "min (0.1 0.1 0); max (0.2 0.2 0.1); layers 1;")
     corner = st.extra["corner"][w]
     assert set(np.unique(n)) <= {-1.0, 0.0, 1.0}
     assert np.array_equal(corner, np.abs(n).sum(axis=1) - 1)

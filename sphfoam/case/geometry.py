@@ -144,16 +144,20 @@ def segments_of(pd: ParticleDict) -> list[Segment]:
 
 
 def _closest(segs: list[Segment], x: np.ndarray, y: np.ndarray,
-             exposed: np.ndarray | None = None, tol: float = 0.0):
+             exposed: np.ndarray | None = None, tol: float = 0.0,
+             skip: np.ndarray | None = None):
     """Nearest point on any segment: distance, point, segment index (-1 for none), whether
     it is an end. With ``exposed`` (per segment), only the exposed segments whose line each
-    point lies behind or on (within ``tol``) are candidates for it."""
+    point lies behind or on (within ``tol``) are candidates for it; ``skip`` (per point) a
+    segment index the point may not take."""
     best = np.full(x.size, np.inf)
     qx = np.zeros(x.size)
     qy = np.zeros(x.size)
     which = np.full(x.size, -1)
     at_end = np.zeros(x.size, bool)
     for i, s in enumerate(segs):
+        if exposed is not None and not exposed[i]:
+            continue
         tx, ty = s.tangent
         L = s.length
         t = (x - s.p0[0]) * tx + (y - s.p0[1]) * ty
@@ -162,9 +166,9 @@ def _closest(segs: list[Segment], x: np.ndarray, y: np.ndarray,
         d = np.hypot(x - px, y - py)
         better = d < best - 1e-12 * max(L, 1.0)
         if exposed is not None:
-            if not exposed[i]:
-                continue
             better &= (x - s.p0[0]) * s.normal[0] + (y - s.p0[1]) * s.normal[1] <= tol
+        if skip is not None:
+            better &= skip != i
         best = np.where(better, d, best)
         qx = np.where(better, px, qx)
         qy = np.where(better, py, qy)
@@ -206,19 +210,10 @@ def _exposed(segs: list[Segment], dx: float) -> np.ndarray:
     eps = 1e-3 * dx
     mx = np.array([0.5 * (s.p0[0] + s.p1[0]) + eps * s.normal[0] for s in segs])
     my = np.array([0.5 * (s.p0[1] + s.p1[1]) + eps * s.normal[1] for s in segs])
-    best = np.full(len(segs), np.inf)
-    covered = np.zeros(len(segs), bool)
-    own = np.arange(len(segs))
-    for i, s in enumerate(segs):           # each probe against every other segment
-        tx, ty = s.tangent
-        tc = np.clip((mx - s.p0[0]) * tx + (my - s.p0[1]) * ty, 0.0, s.length)
-        px, py = s.p0[0] + tc * tx, s.p0[1] + tc * ty
-        d = np.hypot(mx - px, my - py)
-        better = (d < best - 1e-12 * max(s.length, 1.0)) & (own != i)
-        best = np.where(better, d, best)
-        behind = (mx - px) * s.normal[0] + (my - py) * s.normal[1] < 0.0
-        covered = np.where(better, behind & (d < 0.5 * dx), covered)
-    return ~covered
+    d, qx, qy, j, _ = _closest(segs, mx, my, skip=np.arange(len(segs)))
+    nx = np.array([s.normal[0] for s in segs])[j]
+    ny = np.array([s.normal[1] for s in segs])[j]
+    return ~((d < 0.5 * dx) & ((mx - qx) * nx + (my - qy) * ny < 0.0))
 
 
 def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
