@@ -117,6 +117,20 @@ def test_a_variant_that_makes_an_invalid_case_is_caught_before_anything_runs(flu
     assert not (tmp_path / "out" / "good" / "result.json").exists()
 
 
+def test_a_run_is_cloned_without_the_runs_of_the_base_cases_other_studies(flume, tmp_path):
+    """The flume tutorial holds the runs of its low-dissipation study (studyLowDissipation,
+    named by studyDict.lowDissipation's directory); a run of another study copies the case's
+    dictionaries, not those runs."""
+    assert (flume / "studyLowDissipation").is_dir()
+    p = write_study(flume, f"""directory "{tmp_path / 'out'}";
+        variants {{ a {{ }} }}""")
+    st.prepare(st.load(p))
+    run = tmp_path / "out" / "a"
+    assert (run / "system" / "controlDict").is_file()
+    assert (run / "studyDict.lowDissipation").is_file()
+    assert not (run / "studyLowDissipation").exists()
+
+
 def test_the_cli_reports_a_bad_study_without_a_traceback(flume):
     p = write_study(flume, "variants { a { maxCoo 1; } }")
     res = CliRunner().invoke(app, ["study", str(p)])

@@ -394,10 +394,19 @@ def _aside(path: Path) -> Path:
 
 
 def _inside(study: Study) -> tuple[str, ...]:
-    """The study directory, when it lies inside the base case, is not cloned into the runs."""
-    if study.base in study.root.parents:
-        return (study.root.relative_to(study.base).parts[0],)
-    return ()
+    """The folders of the base case that hold studies' runs, which are not cloned into the
+    runs: this study's directory when it lies inside the base case, and the ``directory``
+    of every other study dictionary (``studyDict*``) of the base case."""
+    roots = [study.root]
+    for other in sorted(study.base.glob("studyDict*")):
+        try:
+            d = foamdict.read(other).get("directory", "study")
+        except (foamdict.FoamDictError, UnicodeDecodeError, OSError):
+            continue
+        if isinstance(d, str) and d:
+            roots.append((other.parent / d).resolve())
+    folders = (r.relative_to(study.base).parts[0] for r in roots if study.base in r.parents)
+    return tuple(dict.fromkeys(f for f in folders if f not in ("system", "constant", "0")))
 
 
 # --- one run (in a worker process) -------------------------------------------------------------
