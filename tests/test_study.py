@@ -118,10 +118,12 @@ def test_a_variant_that_makes_an_invalid_case_is_caught_before_anything_runs(flu
 
 
 def test_a_run_is_cloned_without_the_runs_of_the_base_cases_other_studies(flume, tmp_path):
-    """The flume tutorial holds the runs of its low-dissipation study (studyLowDissipation,
-    named by studyDict.lowDissipation's directory); a run of another study copies the case's
+    """The flume tutorial's low-dissipation study keeps its runs in studyLowDissipation (its
+    studyDict.lowDissipation's directory); a run of another study copies the case's
     dictionaries, not those runs."""
-    assert (flume / "studyLowDissipation").is_dir()
+    old = flume / "studyLowDissipation" / "someRun"
+    (old / "system").mkdir(parents=True, exist_ok=True)
+    (old / "result.json").write_text("{}")
     p = write_study(flume, f"""directory "{tmp_path / 'out'}";
         variants {{ a {{ }} }}""")
     st.prepare(st.load(p))
