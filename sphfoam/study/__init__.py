@@ -37,6 +37,8 @@ from sphfoam.case.paths import check_name, inside
 from sphfoam.case.schemas import SPH_FAMILIES, Strict
 
 RESULT = "result.json"
+#: a case's dictionary folders: never a study's directory, never left out of a clone
+CASE_FOLDERS = ("system", "constant", "0")
 
 
 class StudyDict(Strict):
@@ -196,7 +198,7 @@ def load(path: Path | str, only: list[str] | None = None) -> Study:
                                f"dictionary's folder {path.parent}; give an absolute path to "
                                "put the study elsewhere on purpose")
     if root == base or root in base.parents or (root.parent == base and root.name in
-                                                 ("system", "constant", "0")):
+                                                 CASE_FOLDERS):
         raise CaseError.single(rel, "directory", "must not be the base case, a folder holding "
                                "it, or one of its dictionary folders")
     study = Study(path, spec, base, root)
@@ -314,6 +316,7 @@ def prepare(study: Study, rerun: bool = False, log=print) -> list[RunSpec]:
 
     study.root.mkdir(parents=True, exist_ok=True)
     todo, problems = [], []
+    ignore = _study_folders(study)
     for run in study.runs:
         path = Path(run.path)
         if path.is_symlink() or path.parent.resolve() != study.root or path.name in (
@@ -327,7 +330,7 @@ def prepare(study: Study, rerun: bool = False, log=print) -> list[RunSpec]:
             # an interrupted run (its study was stopped): continue it from its last written
             # time when it is still the same case; a run of another definition is kept aside
             fresh = clone_case(study.base, path.with_name(f".{path.name}.clone"),
-                               study.edits[run.name], ignore=_inside(study))
+                               study.edits[run.name], ignore=ignore)
             if _same_dictionaries(fresh, path):
                 shutil.rmtree(fresh)
                 todo.append(run)
@@ -336,7 +339,7 @@ def prepare(study: Study, rerun: bool = False, log=print) -> list[RunSpec]:
             kept = _aside(path)
             log(f"study: {run.name} was begun with other settings; its results are kept "
                 f"in {kept} and it starts again")
-        clone_case(study.base, path, study.edits[run.name], ignore=_inside(study))
+        clone_case(study.base, path, study.edits[run.name], ignore=ignore)
         try:
             c = Case(path)
             c.validate()
@@ -393,20 +396,21 @@ def _aside(path: Path) -> Path:
     raise AssertionError("unreachable")
 
 
-def _inside(study: Study) -> tuple[str, ...]:
+def _study_folders(study: Study) -> tuple[str, ...]:
     """The folders of the base case that hold studies' runs, which are not cloned into the
     runs: this study's directory when it lies inside the base case, and the ``directory``
     of every other study dictionary (``studyDict*``) of the base case."""
     roots = [study.root]
     for other in sorted(study.base.glob("studyDict*")):
         try:
-            d = foamdict.read(other).get("directory", "study")
+            d = foamdict.read(other).get("directory",
+                                         StudyDict.model_fields["directory"].default)
         except (foamdict.FoamDictError, UnicodeDecodeError, OSError):
             continue
         if isinstance(d, str) and d:
             roots.append((other.parent / d).resolve())
     folders = (r.relative_to(study.base).parts[0] for r in roots if study.base in r.parents)
-    return tuple(dict.fromkeys(f for f in folders if f not in ("system", "constant", "0")))
+    return tuple(dict.fromkeys(f for f in folders if f not in CASE_FOLDERS))
 
 
 # --- one run (in a worker process) -------------------------------------------------------------
