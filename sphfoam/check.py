@@ -118,12 +118,13 @@ def validate_runs(study) -> None:
     from sphfoam.case.metrics_dict import load_metrics
 
     problems: list[Problem] = []
+    ignore = st.study_folders(study)
     with tempfile.TemporaryDirectory(prefix="sphfoam-check-") as tmp:
         for run in study.runs:
             where = f"{study.source.name}: run {run.name}"
             try:
                 path = clone_case(study.base, Path(tmp) / run.name, study.edits[run.name],
-                                  ignore=st._inside(study))
+                                  ignore=ignore)
                 c = Case(path)
                 c.validate()
                 check_geometry(c)

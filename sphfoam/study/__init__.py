@@ -316,7 +316,7 @@ def prepare(study: Study, rerun: bool = False, log=print) -> list[RunSpec]:
 
     study.root.mkdir(parents=True, exist_ok=True)
     todo, problems = [], []
-    ignore = _study_folders(study)
+    ignore = study_folders(study)
     for run in study.runs:
         path = Path(run.path)
         if path.is_symlink() or path.parent.resolve() != study.root or path.name in (
@@ -396,7 +396,7 @@ def _aside(path: Path) -> Path:
     raise AssertionError("unreachable")
 
 
-def _study_folders(study: Study) -> tuple[str, ...]:
+def study_folders(study: Study) -> tuple[str, ...]:
     """The folders of the base case that hold studies' runs, which are not cloned into the
     runs: this study's directory when it lies inside the base case, and the ``directory``
     of every other study dictionary (``studyDict*``) of the base case."""
