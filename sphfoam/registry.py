@@ -74,7 +74,7 @@ MODEL_MODULES = (
     "sphfoam.models.kernels", "sphfoam.models.eos", "sphfoam.models.equations",
     "sphfoam.models.viscosity", "sphfoam.models.turbulence", "sphfoam.models.boundaries",
     "sphfoam.models.filters", "sphfoam.models.corrections", "sphfoam.models.noop",
-    "sphfoam.models.riemann", "sphfoam.models.adami",
+    "sphfoam.models.riemann", "sphfoam.models.adami", "sphfoam.models.mdbc",
     "sphfoam.models.integrators", "sphfoam.models.motion", "sphfoam.models.wavemakers",
     "sphfoam.models.goring", "sphfoam.models.wavetheory", "sphfoam.study.metrics",
     "sphfoam.sampling.damBreak", "sphfoam.sampling.profiles", "sphfoam.sampling.waves",

@@ -3,8 +3,8 @@
 The hooks of ``sphfoam.models.base`` (``attach``, ``before_neighbours``, ``add_particles``,
 ``after_rates``, ``advection_velocity``, ...) receive a :class:`RunContext`, never the
 :class:`~sphfoam.engine.simulation.Simulation`: the particles' named arrays, the auxiliary
-fields by name, the neighbour list, the time, the coefficients by name, the cell grid and the
-walls. A backend that keeps the arrays elsewhere (a GPU) gives its hooks the same context,
+fields by name, the neighbour list, the time, the coefficients by name, the kernel, the cell
+grid and the walls. A backend that keeps the arrays elsewhere (a GPU) gives its hooks the same context,
 with the arrays where the hook can read them.
 """
 
@@ -63,6 +63,11 @@ class RunContext:
     @property
     def support_radius(self) -> float:
         return self._sim.pipeline.support_radius
+
+    @property
+    def kernel(self):
+        """The selected kernel model (its jitted ``f_jit``, ``support`` in h, ``alpha(dim)``)."""
+        return self._sim.pipeline.selection.kernel
 
     @property
     def cells(self):

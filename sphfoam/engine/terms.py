@@ -39,7 +39,7 @@ from dataclasses import dataclass, field, replace
 
 #: per-particle fields that exist in three dimensions only (read as ``fld[F_n@, b]`` expands
 #: them: a 2-D case neither sets them up nor reads them)
-THREE_D_FIELDS = ("nz",)
+THREE_D_FIELDS = ("nz", "ghostZ")
 
 #: stages of a time step, in the order of the generated module
 STAGES = {

@@ -12,7 +12,8 @@ continuity          ``equations``; ``riemann`` (Riemann-solver forms)
 momentum            ``equations``; ``riemann`` (Riemann-solver forms)
 viscosity           ``viscosity``
 turbulence          ``turbulence`` (with ``walllaw``, its wall condition)
-boundary            ``boundaries`` (with ``mirror``, mirrored ghosts); ``adami`` (Adami's walls)
+boundary            ``boundaries`` (with ``mirror``, mirrored ghosts); ``adami`` (Adami's walls);
+                    ``mdbc`` (the modified dynamic boundary)
 densityFilter       ``filters``; ``diffusion`` (delta-SPH density diffusion)
 velocityCorrection  ``corrections``
 kernelCorrection    ``corrections``

@@ -1,6 +1,7 @@
 """Solid-wall representations (T §3.8-3.9, P §4).
 
-Five ways to keep water out of a wall, as the thesis compares them:
+Five ways to keep water out of a wall, as the thesis compares them, and two later ones
+(their own modules):
 
 ==========================  ===================  =============================================
 model                       wall particles       how the fluid feels the wall
@@ -13,6 +14,9 @@ model                       wall particles       how the fluid feels the wall
                                                  step, T(3.77)-(3.80) (free- or no-slip)
 ``hybrid``                  rows behind the wall stationary ghosts where wet, Monaghan-Kos
                                                  force (range dx) where dry, T §3.9
+``adami`` (``adami``)       rows behind the wall pressure extrapolated from the fluid, AHA12
+``mDBC`` (``mdbc``)         rows behind the wall stationary ghosts whose density is the fluid's
+                                                 fit at their mirror image (English et al. 2022)
 ==========================  ===================  =============================================
 
 Where the fluid pair loop meets a wall neighbour ``b`` the repulsive forms read the wall

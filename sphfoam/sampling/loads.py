@@ -123,7 +123,7 @@ _PRESSURE_FORMS = {"symmetric": 0, "colagrossiLandrini": 1}
 _VISCOUS_FORMS = {"none": 0, "artificial": 1, "laminar": 2}
 #: the boundaries whose wall particles act on the fluid through the momentum and viscous
 #: equations themselves (their pair forces are the fluid's), which ``forces`` sums
-_BOUNDARIES = ("stationaryGhosts", "adami")
+_BOUNDARIES = ("stationaryGhosts", "adami", "mDBC")
 
 
 @njit(cache=True)

@@ -144,7 +144,7 @@ def local_surface(xf, yf, dx):
 
 
 #: the per-wall-particle fields the set-up can write (sphfoam.case.geometry.wall_metadata)
-WALL_METADATA = ("nx", "ny", "wallDist", "corner", "nFull")
+WALL_METADATA = ("nx", "ny", "wallDist", "corner", "nFull", "ghostX", "ghostY")
 
 
 def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | None = None,
@@ -275,7 +275,9 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         {f for f in fields if f in WALL_METADATA}
     if wanted and xw.size:
         nx, ny, dist, corner, _ = wall_metadata(segs, xw, yw, dx)
-        meta = {"nx": nx, "ny": ny, "wallDist": dist, "corner": corner}
+        # the ghost node (mDBC): the mirror image across the nearest wall point
+        meta = {"nx": nx, "ny": ny, "wallDist": dist, "corner": corner,
+                "ghostX": 2.0 * dist * nx, "ghostY": 2.0 * dist * ny}
         if "nFull" in wanted:
             meta["nFull"] = full_pairs(segs, xw, yw, dx, support_radius)
         for k in wanted:

@@ -122,7 +122,7 @@ def local_surface(p: np.ndarray, dx: float) -> np.ndarray:
 
 
 #: the wall fields the 3-D set-up writes for axis-aligned walls (``wall_geometry``)
-GEOMETRY_FIELDS = ("nx", "ny", "nz", "corner", "nFull")
+GEOMETRY_FIELDS = ("nx", "ny", "nz", "corner", "nFull", "ghostX", "ghostY", "ghostZ")
 
 
 def _refuse(boundary, fields, walls=()) -> None:
@@ -147,8 +147,10 @@ def _refuse(boundary, fields, walls=()) -> None:
     if wanted & set(GEOMETRY_FIELDS):
         for name, w in walls:
             if not isinstance(w, (BoxWalls, BlockWalls)):
+                what = "ghost nodes" if wanted & {"ghostX", "ghostY", "ghostZ"} \
+                    else "wall normals"
                 raise CaseError.single(PD, f"walls.{name}.type", (
-                    f"{getattr(boundary, 'name', 'the boundary')} reads wall normals, which "
+                    f"{getattr(boundary, 'name', 'the boundary')} reads {what}, which "
                     f"the 3-D set-up writes for box and block walls only (plane faces on "
                     f"the lattice), not for a {w.type}: use stationaryGhosts or adami"))
 
@@ -176,9 +178,12 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
     faces and to every face whose first layer (less than dx behind it) it is in. A block's face that lies on another wall (a
     block standing on the tank's floor) is not a face. With ``support_radius``, ``nFull``:
     the lattice sites inside the support that are behind no wall, the pairs the particle
-    forms fully submerged (T §3.9)."""
+    forms fully submerged (T §3.9). ``ghostX``, ``ghostY``, ``ghostZ``: the vector to the
+    particle's mirror image across the wall surface (twice the vector to the nearest point of
+    the tank's inside or of the block's nearest faces; mDBC's ghost node)."""
     n = np.zeros((len(pw), 3))
     corner = np.zeros(len(pw))
+    ghost = np.zeros((len(pw), 3))
     for i, w in enumerate(walls):
         sel = np.flatnonzero(patch == i)
         if not sel.size:
@@ -189,6 +194,7 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
             into = np.clip(lo - p, 0.0, None) - np.clip(p - hi, 0.0, None)   # into the tank
             near = np.abs(into) > 0.25 * dx
             out = np.sign(into)
+            ghost[sel] = 2.0 * into      # to the nearest point of the tank, and as far again
         else:
             depth = np.stack([p - lo, hi - p])                 # (2, n, 3): below, above
             for side, edge in ((0, lo), (1, hi)):
@@ -202,10 +208,15 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
             # its nearest faces, and every face whose first layer it is in: a block's faces
             # need not lie on the lattice, so an edge's column can be 0.5 dx behind one face
             # and 0.9 dx behind the other
-            near = (d <= d.min(axis=1)[:, None] + 0.25 * dx) | (d < dx)
+            nearest = d <= d.min(axis=1)[:, None] + 0.25 * dx
+            near = nearest | (d < dx)
+            # the ghost node: mirrored across the nearest face (across the edge or vertex
+            # where two or three are equally near)
+            ghost[sel] = np.where(nearest & np.isfinite(d), 2.0 * d * out, 0.0)
         n[sel] = np.where(near, out, 0.0)
         corner[sel] = np.maximum(near.sum(axis=1) - 1, 0)
-    geo = {"nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2], "corner": corner}
+    geo = {"nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2], "corner": corner,
+           "ghostX": ghost[:, 0], "ghostY": ghost[:, 1], "ghostZ": ghost[:, 2]}
     if support_radius is not None:
         off = lattice_offsets(support_radius / dx, 3) * dx
         full = np.zeros(len(pw))

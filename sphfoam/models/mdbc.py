@@ -1,0 +1,374 @@
+"""The modified dynamic boundary condition (mDBC) of English, Domínguez, Vacondio, Crespo,
+Stansby, Lind, Chiapponi & Gómez-Gesteira (2022, Comput. Part. Mech. 9, 911-925).
+
+Rows of wall particles behind the wall as for ``stationaryGhosts`` (the first dx/2 behind
+the wall surface), but their density does not evolve by pairing with the fluid: before every
+evaluation each wall particle w takes the density of the fluid at its *ghost node*, its
+mirror image across the wall surface, x_g = x_w + g_w (the set-up's ``ghostX``, ``ghostY``,
+``ghostZ``: twice the vector from the particle to the nearest point of the wall surface, so
+that the node lies as far in front of the wall as the particle lies behind it; behind a
+concave corner or edge, the mirror image across the corner). At the node the fluid's density
+and its gradient come from a first-order (linear) fit over the fluid particles f within the
+kernel's support, and are extrapolated back to the particle:
+
+    rho_w = rho_g + (x_w - x_g) . grad rho_g                       (English et al. 2022, eq. 10)
+
+The fit is the kernel-weighted least-squares one, with the weights V_f W(x_f - x_g),
+V_f = m_f / rho_f: the same first-order consistency as the corrected kernel gradient of Liu
+& Liu (2006) that English et al. write (eqs. 8-9), in its symmetric form. Where the fit is
+ill-conditioned (the determinant of the moment matrix, normalised by the kernel sum and h,
+below ``MIN_DETERMINANT`` times a full support's: a node at the edge of the water, in a
+corner under the free surface or above it) English et al. take the zeroth order, the
+Shepard mean of the densities; here it is the zeroth order of the pressure continued
+hydrostatically to the particle (Adami, Hu & Adams 2012, eq. 27, weighted at the node),
+p_w = sum_f (p_f + rho_f g . (x_w - x_f)) V_f W / sum_f V_f W, exact for water at rest, where
+the Shepard mean under a free surface is that of deeper water. A node with no fluid within
+the support leaves the particle at rho0, and the particle's density is held at rho0 at
+least: a wall never pulls the water, which would draw it into the wall (DualSPHysics holds
+its boundary particles so). Pressure and sound speed follow from the equation of state
+(Tait, T(3.27)). Wall velocities stay as set up (zero: no slip for the viscous term, as the
+original DBC).
+
+The fluid sees the wall particles as neighbours of kind ``ghost``: every term treats them as
+fluid with the density set here. Compared with ``stationaryGhosts``, whose wall density
+rises only where water is compressed against it, the wall's pressure is the water's own
+continued through the wall, so the water rests against the wall surface (the dynamic
+boundary's gap, of the order of h, closes to about dx/2).
+
+The ghost nodes' neighbours are gathered at each build of the neighbour list, over the cell
+grid the list uses, within a cell side (the support and the list's skin) of each node, for
+the wall particles that can meet the fluid (less deep behind the wall than the support
+radius less dx/4); before each evaluation the fit runs over those lists, in compiled
+parallel loops. The run-time hooks have no device form: backend cuda refuses ``mDBC`` by
+name. Measured (cost, the 3-D dam break): docs/user-guide.md and
+benchmarks/results/damBreak3D-2026-12-05/README.md.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from sphfoam.engine.state import FLUID, WALL
+from sphfoam.models.base import CaseContext
+from sphfoam.models.boundaries import Boundary
+from sphfoam.registry import register
+
+#: the first-order fit is used where det of the normalised moment matrix is at least this
+#: fraction of a full support's (on the lattice of spacing dx)
+MIN_DETERMINANT = 0.05
+
+_JIT = dict(cache=True, nogil=True)
+
+
+@njit(**_JIT)
+def _wrap(d, period):
+    """The minimum image of a separation along a periodic axis (period 0: not periodic)."""
+    if period > 0.0:
+        d -= period * math.floor(d / period + 0.5)
+    return d
+
+
+@njit(**_JIT)
+def _cell_range(c, n, periodic):
+    """The three cells c-1 .. c+1 along an axis: (first, count); on a periodic axis every
+    cell index is taken modulo n by the caller."""
+    if periodic:
+        return c - 1, min(3, n)
+    lo = max(c - 1, 0)
+    hi = min(c + 1, n - 1)
+    return lo, hi - lo + 1
+
+
+@njit(parallel=True, **_JIT)
+def ghost_lists(walls, gx, gy, gz, x, y, z, kind, cell_start, x0, y0, z0, inv_cell, ncx,
+                ncy, ncz, lx, ly, lz, reach2, counts, fill, out_idx):
+    """Two passes over the wall particles ``walls`` (indices): ``fill`` False counts into
+    ``counts[k]`` the fluid particles within sqrt(reach2) of wall k's ghost node (gx, gy, gz:
+    the nodes' positions); ``fill`` True writes them into ``out_idx`` from ``counts[k]`` (the
+    running sum's start). 2-D: z and gz empty and ncz 1."""
+    three = z.shape[0] > 0
+    for k in prange(walls.shape[0]):
+        px, py = gx[k], gy[k]
+        pz = gz[k] if three else 0.0
+        cx = int(math.floor((px - x0) * inv_cell))
+        cy = int(math.floor((py - y0) * inv_cell))
+        cz = int(math.floor((pz - z0) * inv_cell)) if three else 0
+        ix0, nx_ = _cell_range(cx, ncx, lx > 0.0)
+        iy0, ny_ = _cell_range(cy, ncy, ly > 0.0)
+        iz0, nz_ = _cell_range(cz, ncz, lz > 0.0) if three else (0, 1)
+        n = 0
+        start = counts[k]
+        for kz in range(iz0, iz0 + nz_):
+            jz = kz % ncz
+            for ky in range(iy0, iy0 + ny_):
+                jy = ky % ncy
+                for kx in range(ix0, ix0 + nx_):
+                    c = (jz * ncy + jy) * ncx + kx % ncx
+                    for b in range(cell_start[c], cell_start[c + 1]):
+                        if kind[b] != FLUID:
+                            continue
+                        dx_ = _wrap(x[b] - px, lx)
+                        dy_ = _wrap(y[b] - py, ly)
+                        r2 = dx_ * dx_ + dy_ * dy_
+                        if three:
+                            dz_ = _wrap(z[b] - pz, lz)
+                            r2 += dz_ * dz_
+                        if r2 < reach2:
+                            if fill:
+                                out_idx[start + n] = b
+                            n += 1
+        if not fill:
+            counts[k] = n
+
+
+@njit(**_JIT)
+def _solve(a, m):
+    """Solve the m x m system in a[:m, :m] with right-hand side a[:m, m] in place (Gaussian
+    elimination with partial pivoting); returns the matrix's determinant (0.0 for a singular
+    one, the system then unsolved)."""
+    det = 1.0
+    for i in range(m):
+        piv = i
+        for r in range(i + 1, m):
+            if abs(a[r, i]) > abs(a[piv, i]):
+                piv = r
+        if a[piv, i] == 0.0:
+            return 0.0
+        if piv != i:
+            for c in range(m + 1):
+                t = a[i, c]
+                a[i, c] = a[piv, c]
+                a[piv, c] = t
+            det = -det
+        det *= a[i, i]
+        for r in range(i + 1, m):
+            f = a[r, i] / a[i, i]
+            for c in range(i, m + 1):
+                a[r, c] -= f * a[i, c]
+    for i in range(m - 1, -1, -1):
+        t = a[i, m]
+        for c in range(i + 1, m):
+            t -= a[i, c] * a[c, m]
+        a[i, m] = t / a[i, i]
+    return det
+
+
+@njit(parallel=True, **_JIT)
+def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, lz, h,
+                 support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work):
+    """English et al. (2022) eq. (10) for each wall particle ``walls[k]``: the linear fit of
+    the fluid's density at its ghost node (offset ox, oy, oz from it) over the node's list
+    ``idx[starts[k]:starts[k + 1]]``, extrapolated to the particle; where the fit is
+    ill-conditioned, the node's zeroth order with the hydrostatic continuation to the particle
+    (AHA12 eq. (27) with the node's weights); its p and c by Tait's equation. ``work``
+    (len(walls), 4, 5) is scratch."""
+    three = z.shape[0] > 0
+    mm = 4 if three else 3
+    inv_h = 1.0 / h
+    q2max = support * support
+    for k in prange(walls.shape[0]):
+        a = walls[k]
+        px = x[a] + ox[k]
+        py = y[a] + oy[k]
+        pz = z[a] + oz[k] if three else 0.0
+        s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
+        b0 = b1 = b2 = b3 = 0.0
+        for n in range(starts[k], starts[k + 1]):
+            b = idx[n]
+            rx = _wrap(x[b] - px, lx) * inv_h
+            ry = _wrap(y[b] - py, ly) * inv_h
+            rz = _wrap(z[b] - pz, lz) * inv_h if three else 0.0
+            q2 = rx * rx + ry * ry + rz * rz
+            if q2 >= q2max:
+                continue
+            vw = m[b] / rho[b] * kernel_f(math.sqrt(q2))
+            vr = vw * rho[b]
+            s00 += vw
+            s01 += vw * rx
+            s02 += vw * ry
+            s03 += vw * rz
+            s11 += vw * rx * rx
+            s12 += vw * rx * ry
+            s13 += vw * rx * rz
+            s22 += vw * ry * ry
+            s23 += vw * ry * rz
+            s33 += vw * rz * rz
+            b0 += vr
+            b1 += vr * rx
+            b2 += vr * ry
+            b3 += vr * rz
+        w = work[k]
+        w[0, 0], w[0, 1], w[0, 2], w[1, 1], w[1, 2], w[2, 2] = s00, s01, s02, s11, s12, s22
+        w[0, mm], w[1, mm], w[2, mm] = b0, b1, b2
+        if three:
+            w[0, 3], w[1, 3], w[2, 3], w[3, 3], w[3, mm] = s03, s13, s23, s33, b3
+        s = w[0, 0]
+        fit = False
+        if s > 0.0:
+            for i in range(mm):
+                for j in range(i):
+                    w[i, j] = w[j, i]
+            # the determinant of the moment matrix normalised by the kernel sum
+            fit = _solve(w, mm) / s ** mm >= det_min
+        if fit:
+            r = w[0, mm] - (ox[k] * w[1, mm] + oy[k] * w[2, mm]
+                            + (oz[k] * w[3, mm] if three else 0.0)) * inv_h
+        elif s > 0.0:
+            # the fluid's pressure continued hydrostatically to the particle, weighted at the
+            # node: p_w = sum_f (p_f + rho_f g . (x_w - x_f)) V_f W / sum_f V_f W
+            sp = 0.0
+            for n in range(starts[k], starts[k + 1]):
+                b = idx[n]
+                rx = _wrap(x[b] - px, lx)
+                ry = _wrap(y[b] - py, ly)
+                rz = _wrap(z[b] - pz, lz) if three else 0.0
+                q2 = (rx * rx + ry * ry + rz * rz) * inv_h * inv_h
+                if q2 >= q2max:
+                    continue
+                vw = m[b] / rho[b] * kernel_f(math.sqrt(q2))
+                pb = B * ((rho[b] / rho0) ** gamma - 1.0)
+                # x_w - x_f = -(offset + r)
+                sp += vw * (pb - rho[b] * (gx * (ox[k] + rx) + gy * (oy[k] + ry)
+                                           + gz * ((oz[k] if three else 0.0) + rz)))
+            r = rho0 * max(1.0 + sp / s / B, 1e-6) ** (1.0 / gamma)
+        else:
+            r = rho0
+        # never below rho0: a wall that pulled would absorb the water (DualSPHysics' rule for
+        # its boundary particles)
+        r = max(r, rho0)
+        rho[a] = r
+        ratio = r / rho0
+        p[a] = B * (ratio ** gamma - 1.0)
+        c[a] = c0 * ratio ** (0.5 * (gamma - 1.0))
+
+
+@njit(parallel=True, **_JIT)
+def state_sum(x, y, z, rho, kind):
+    """A sum of the positions and the fluid's densities: unchanged, nothing the wall
+    densities depend on has changed since they were computed (the equation of state and the
+    rates pass of one evaluation both call the hooks)."""
+    s = 0.0
+    three = z.shape[0] > 0
+    for a in prange(x.shape[0]):
+        t = x[a] + 3.0 * y[a]
+        if three:
+            t += 7.0 * z[a]
+        if kind[a] == FLUID:
+            t += 11.0 * rho[a]
+        s += t
+    return s
+
+
+def full_support_determinant(kernel, hdx: float, dim: int) -> float:
+    """The determinant of the normalised moment matrix (r in units of h) of a node on a full
+    lattice of spacing dx = h / hdx: the scale of ``MIN_DETERMINANT``."""
+    reach = kernel.support * hdx
+    n = int(math.ceil(reach)) + 1
+    axes = [np.arange(-n, n + 1, dtype=float)] * dim
+    r = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, dim) / hdx
+    q = np.linalg.norm(r, axis=1)
+    w = np.array([kernel.f_jit(float(v)) if v < kernel.support else 0.0 for v in q])
+    basis = np.column_stack([np.ones(len(r)), r])
+    mat = (basis * w[:, None]).T @ basis / w.sum()
+    return float(np.linalg.det(mat))
+
+
+@register
+class ModifiedDynamic(Boundary):
+    """English et al. (2022): wall particles whose density is the fluid's at their ghost
+    node, extrapolated (see the module docstring)."""
+
+    name = "mDBC"
+    doc = ("modified dynamic boundary, English et al. (2022): wall-particle rows whose "
+           "density is the fluid's linear fit at the ghost node (the mirror image across the "
+           "wall), extrapolated to the particle (eq. 10); p by the EOS")
+    keeps_wall_velocity = True
+    #: the hooks handle z in 3-D
+    hook_dims = (2, 3)
+
+    @property
+    def wall_fields(self) -> tuple[str, ...]:
+        """The vector from each wall particle to its ghost node (set-up)."""
+        return ("ghostX", "ghostY", "ghostZ")
+
+    def params(self, ctx: CaseContext):
+        return {}
+
+    def neighbour_kinds(self):
+        """Every wall particle is a ghost: fluid to every term, with the density set here;
+        its own density does not evolve."""
+        return {"ghost": "else"}
+
+    # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
+    def attach(self, run):
+        st = run.state
+        missing = [k for k in self.fields_in(st.dim) if k not in st.extra]
+        if missing and (st.kind == WALL).any():
+            raise ValueError(f"boundary mDBC reads the wall fields {', '.join(missing)}, "
+                             "which this case's particles lack: run sphfoam setup again")
+        kernel = run.kernel
+        prm = run.coefficients()
+        self._kernel_f = kernel.f_jit
+        self._support = float(kernel.support)
+        self._det_min = MIN_DETERMINANT * full_support_determinant(
+            kernel, float(kernel.coeffs.hdx), st.dim)
+        self._eos = (prm["eos_rho0"], prm["eos_B"], prm["eos_gamma"], prm["eos_c0"])
+        self._dx = run.h / float(kernel.coeffs.hdx)
+        self._g = (prm["gx"], prm["gy"], prm.get("gz", 0.0))
+        self._lists = None
+        self._sum = None
+
+    def after_sort(self, run, order):
+        """The ghost nodes' lists of fluid particles, over the cell grid just sorted."""
+        st = run.state
+        cells = run.cells
+        three = st.dim == 3
+        ox, oy = st.extra["ghostX"], st.extra["ghostY"]
+        oz = st.extra["ghostZ"] if three else ox[:0]
+        off2 = ox * ox + oy * oy + (oz * oz if three else 0.0)
+        reach = run.support_radius
+        # a particle deeper behind the wall than the support less dx/4 meets no fluid (the
+        # fluid keeps about dx/2 in front of the wall surface): half the offset is its depth
+        deepest = 2.0 * (reach - 0.25 * self._dx)
+        walls = np.flatnonzero((st.kind == WALL) & (off2 < deepest * deepest))
+        gx = st.x[walls] + ox[walls]
+        gy = st.y[walls] + oy[walls]
+        gz = st.z[walls] + oz[walls] if three else gx[:0]
+        z = st.z if three else st.x[:0]
+        grid = (cells.x0, cells.y0, cells.z0, 1.0 / cells.cell_size, cells.ncx, cells.ncy,
+                cells.ncz if three else 1, cells.lx, cells.ly, cells.lz if three else 0.0,
+                cells.cell_size ** 2)
+        counts = np.zeros(len(walls) + 1, dtype=np.int64)
+        ghost_lists(walls, gx, gy, gz, st.x, st.y, z, st.kind, cells.cell_start, *grid,
+                    counts[:-1], False, counts[:0])
+        starts = np.zeros(len(walls) + 1, dtype=np.int64)
+        np.cumsum(counts[:-1], out=starts[1:])
+        idx = np.empty(int(starts[-1]), dtype=np.int64)
+        ghost_lists(walls, gx, gy, gz, st.x, st.y, z, st.kind, cells.cell_start, *grid,
+                    starts[:-1].copy(), True, idx)
+        self._lists = (walls, np.ascontiguousarray(ox[walls]), np.ascontiguousarray(oy[walls]),
+                       np.ascontiguousarray(oz[walls]) if three else ox[:0], starts, idx,
+                       np.zeros((len(walls), 4, 5)))
+        self._sum = None
+
+    def before_evaluation(self, run):
+        """The wall particles' density, pressure and sound speed from their ghost nodes."""
+        if self._lists is None:
+            return
+        st = run.state
+        three = st.dim == 3
+        z = st.z if three else st.x[:0]
+        now = state_sum(st.x, st.y, z, st.rho, st.kind)
+        if now == self._sum:
+            return
+        walls, ox, oy, oz, starts, idx, work = self._lists
+        cells = run.cells
+        rho0, B, gamma, c0 = self._eos
+        wall_density(walls, ox, oy, oz, starts, idx, st.x, st.y, z, st.m, st.rho, st.p, st.c,
+                     cells.lx, cells.ly, cells.lz if three else 0.0, run.h,
+                     self._support, self._kernel_f, self._det_min, rho0, B, gamma, c0,
+                     *self._g, work)
+        self._sum = now

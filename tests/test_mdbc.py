@@ -1,0 +1,206 @@
+"""The modified dynamic boundary (mDBC, English et al. 2022): the ghost nodes the set-up
+writes, the first-order fit at the node and its fall-back, the tank at rest, the refusals."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from sphfoam.case.case import Case
+from sphfoam.case.times import list_times
+from sphfoam.engine.state import FLUID, WALL
+from sphfoam.io.fields import read_state
+from sphfoam.models import mdbc
+from sphfoam.models.kernels import WendlandC2
+from sphfoam.setup import setup_case
+from sphfoam.timeloop import run_case
+
+RHO0, G = 1000.0, 9.81
+
+
+def _fit(fluid, rho, wall, offset, dx, hdx=1.3, g=(0.0, 0.0, 0.0)):
+    """mdbc.wall_density for one wall particle at ``wall`` with its ghost node at
+    ``wall + offset``, over the fluid particles ``fluid`` (n, dim) of density ``rho`` and
+    volume dx^dim (Wendland C2, Tait with gamma 7, B = 1e5, c0 = 10)."""
+    dim = fluid.shape[1]
+    pos = np.vstack([fluid, wall[None, :]])
+    n = len(pos)
+    x, y = pos[:, 0].copy(), pos[:, 1].copy()
+    z = pos[:, 2].copy() if dim == 3 else x[:0]
+    m = np.append(rho * dx ** dim, 0.0)
+    r = np.append(rho, RHO0)
+    p, c = np.zeros(n), np.zeros(n)
+    off = [np.array([v]) for v in offset] + ([] if dim == 3 else [x[:0]])
+    kernel = WendlandC2()
+    det_min = mdbc.MIN_DETERMINANT * mdbc.full_support_determinant(kernel, hdx, dim)
+    mdbc.wall_density(np.array([n - 1]), *off, np.array([0, n - 1]), np.arange(n - 1), x, y,
+                      z, m, r, p, c, 0.0, 0.0, 0.0, hdx * dx, kernel.support, kernel.f_jit,
+                      det_min, RHO0, 1e5, 7.0, 10.0, *g, np.zeros((1, 4, 5)))
+    return r[-1], p[-1], c[-1]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_fit_at_the_ghost_node_extrapolates_a_linear_density_exactly(dim):
+    """English et al. (2022) eq. (10): a density linear in space, sampled by the fluid
+    above a wall (half the node's support empty), is extrapolated to the wall particle
+    dx/2 behind the wall exactly (to round-off), as a hydrostatic column's is; p and c
+    follow from Tait's equation; an extrapolated density below rho0 is held at rho0."""
+    dx = 0.1
+    k = np.arange(-6, 7) * dx
+    up = (np.arange(6) + 0.5) * dx
+    grids = np.meshgrid(*([k] * (dim - 1) + [up]), indexing="ij")
+    fluid = np.column_stack([g.ravel() for g in grids])
+    grad = np.array([3.0, 5.0, -7.0][:dim] if dim == 3 else [3.0, -5.0])
+    rho = RHO0 + fluid @ grad
+    wall = np.zeros(dim)
+    wall[-1] = -0.5 * dx
+    offset = np.zeros(dim)
+    offset[-1] = dx
+    r, p, c = _fit(fluid, rho, wall, offset, dx)
+    assert RHO0 + wall @ grad > RHO0
+    assert r == pytest.approx(RHO0 + wall @ grad, abs=1e-9)
+    assert p == pytest.approx(1e5 * ((r / RHO0) ** 7 - 1.0), rel=1e-12)
+    assert c == pytest.approx(10.0 * (r / RHO0) ** 3, rel=1e-12)
+    # the density falling towards the wall below rho0: the wall is held at rho0 (no pull)
+    r, p, _ = _fit(fluid, RHO0 + 0.1 - fluid @ grad, wall, offset, dx)
+    assert r == RHO0 and p == 0.0
+
+
+def test_a_node_at_the_edge_of_the_water_takes_the_hydrostatic_zeroth_order():
+    """Two fluid particles in the node's support cannot carry a linear fit in 2-D (the
+    moment matrix is singular): the particle takes the node's zeroth order of the pressure
+    continued hydrostatically to it (AHA12 eq. (27) weighted at the node): the mean of the
+    two (equally weighted) p_f + rho_f g (y_f - y_w); with no fluid in its support it is
+    left at rho0."""
+    dx = 0.1
+    fluid = np.array([[0.0, 0.05], [0.1, 0.05]])
+    rho = np.array([1001.0, 1003.0])
+    r, p, _ = _fit(fluid, rho, np.array([0.05, -0.05]), (0.0, 0.1), dx, g=(0.0, -9.81, 0.0))
+    pf = 1e5 * ((rho / RHO0) ** 7 - 1.0)
+    assert p == pytest.approx(np.mean(pf + rho * 9.81 * 0.1), rel=1e-12)
+    assert r == pytest.approx(RHO0 * (1.0 + p / 1e5) ** (1.0 / 7.0), rel=1e-14)
+    r, _, _ = _fit(fluid, rho, np.array([5.0, -0.05]), (0.0, 0.1), dx)
+    assert r == RHO0
+
+
+def _edit(path, pattern, repl):
+    text = path.read_text()
+    new, n = re.subn(pattern, repl, text, count=1)
+    assert n == 1, pattern
+    path.write_text(new)
+
+
+def test_3d_ghost_nodes_mirror_each_wall_particle_across_the_wall(tutorial):
+    """The set-up's ghost nodes in 3-D: a tank's face particle is mirrored across its face
+    (the node as far in front as the particle is behind), an edge or vertex particle across
+    the edge or vertex (diagonally); a block on the floor mirrors across its own nearest
+    face, never its bottom (which stands on the floor)."""
+    from sphfoam.setup.initial import generate_case
+
+    case = tutorial("hydrostaticTank3D")
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type mDBC;")
+    (case / "system" / "particleDict").write_text(
+        "FoamFile { version 2.0; format ascii; class dictionary; object particleDict; }\n"
+        "dimension 3; dx 0.05;\n"
+        "fluid { water { type box; min (0.35 0 0); max (0.6 0.6 0.2); } }\n"
+        "walls {\n"
+        "    tank  { type box; min (0 0 0); max (0.6 0.6 0.4); layers 3; open top; }\n"
+        "    block { type block; min (0.1 0.1 0); max (0.3 0.3 0.15); layers 3; }\n"
+        "}\n")
+    st = generate_case(Case(case))
+    w = st.kind == WALL
+    pos = np.column_stack(st.positions)[w]
+    g = np.column_stack([st.extra[k][w] for k in ("ghostX", "ghostY", "ghostZ")])
+    h = 0.025
+    floor = np.isclose(pos[:, 2], -5 * h) & (np.abs(pos[:, :2] - 0.425) < 0.03).all(axis=1)
+    assert floor.any() and np.allclose(g[floor], [0, 0, 10 * h])
+    edge = np.isclose(pos[:, 2], -h) & np.isclose(pos[:, 0], -3 * h) & \
+        (np.abs(pos[:, 1] - 0.4) < 0.08)
+    assert edge.any() and np.allclose(g[edge], [6 * h, 0, 2 * h])
+    vertex = np.isclose(pos, [0.6 + h, -h, -h]).all(axis=1)
+    assert np.allclose(g[vertex], [-2 * h, 2 * h, 2 * h])
+    block = (pos[:, :2] > 0.1).all(axis=1) & (pos[:, :2] < 0.3).all(axis=1) & \
+        (pos[:, 2] > 0)
+    assert block.any() and not (g[block][:, 2] < 0).any()          # never into the floor
+    top = block & np.isclose(pos[:, 2], 0.15 - h) & \
+        (np.abs(pos[:, :2] - 0.2) < 0.03).all(axis=1)
+    assert top.sum() == 4 and np.allclose(g[top], [0, 0, 2 * h])
+    side = block & np.isclose(pos[:, 0], 0.3 - h) & np.isclose(pos[:, 2], 3 * h) & \
+        (np.abs(pos[:, 1] - 0.2) < 0.03)
+    assert side.sum() == 2 and np.allclose(g[side], [2 * h, 0, 0])
+    # every first-layer particle's node lies in front of the wall: outside the tank's walls
+    # and the block, except the floor's under the block (a deeper layer's node may lie in
+    # another wall: it sees no water)
+    node = pos + g
+    faced = np.linalg.norm(g, axis=1) < 1.01 * np.sqrt(3.0) * 0.05
+    inside = (node[faced] > 0).all(axis=1) & (node[faced, :2] < 0.6).all(axis=1)
+    in_block = (node[faced] > [0.1, 0.1, -1]).all(axis=1) & \
+        (node[faced] < [0.3, 0.3, 0.15]).all(axis=1)
+    under_block = (pos[faced, :2] > 0.1).all(axis=1) & (pos[faced, :2] < 0.3).all(axis=1) \
+        & (pos[faced, 2] < 0)                   # the floor under the block: no water there
+    assert (inside & ~in_block | under_block).all()
+
+
+def test_mdbc_refuses_3d_walls_without_ghost_nodes_by_name(tutorial):
+    """The 3-D set-up writes ghost nodes for box tanks and blocks (plane faces): a cylinder
+    wall with mDBC is refused, naming the file, the wall and the model."""
+    from sphfoam.case.errors import CaseError
+
+    case = tutorial("hydrostaticTank3D")
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type mDBC;")
+    (case / "system" / "particleDict").write_text(
+        "FoamFile { version 2.0; format ascii; class dictionary; object particleDict; }\n"
+        "dimension 3; dx 0.05;\n"
+        "fluid { w { type box; min (0 0 0); max (0.4 0.4 0.2); } }\n"
+        "walls { tank { type box; min (0 0 0); max (0.4 0.4 0.4); }\n"
+        "        post { type cylinder; point1 (0.2 0.2 0); point2 (0.2 0.2 0.3); "
+        "radius 0.05; } }\n")
+    with pytest.raises(CaseError, match=r"system/particleDict.*walls.post.type: mDBC reads "
+                                        r"ghost nodes, which the 3-D set-up writes for box "
+                                        r"and block walls only"):
+        setup_case(Case(case), log=lambda m: None)
+
+
+def test_a_2d_tank_rests_on_mdbc_walls_without_the_dynamic_boundarys_gap(tutorial):
+    """The hydrostatic tank (H/dx = 20, 0.5 s) on mDBC walls: nobody in a wall; the water
+    rests against the bed (its lowest row within 0.7 dx of the bed, the first wall row
+    dx/2 behind it: the wall's pressure is the water's continued through it); the bed
+    pressure within 2 % of rho g H; the first wall row's pressure the column's continued
+    to it, rho g (H + dx/2), within 3 %; the wall velocity zero."""
+    from sphfoam.sampling.hydrostatic import bed_pressure
+
+    dx, Hw, W = 0.02, 0.4, 0.5
+    case = tutorial("hydrostaticTank", {"constant/sphProperties:boundary.type": "mDBC",
+                                        "system/particleDict:dx": dx,
+                                        "system/controlDict:endTime": 0.5,
+                                        "system/controlDict:writeInterval": 0.25})
+    setup_case(Case(case), log=lambda m: None)
+    rep = run_case(case, progress=False, echo=None)
+    assert rep.removed == 0
+    for t, folder in list_times(case)[1:]:
+        s = read_state(folder)
+        f = s["type"] == FLUID
+        x, y = s["positions"][f].T
+        assert x.min() > 0 and x.max() < W and y.min() > 0, f"a particle in a wall at t={t}"
+    mid = np.abs(x - 0.25) < 0.15
+    assert y[mid].min() < 0.7 * dx
+    bed = bed_pressure(x, y, s["p"][f], x0=0.0, width=W, depth=Hw, reach=2.6 * dx, dx=dx)[0]
+    assert bed == pytest.approx(RHO0 * G * Hw, rel=0.02)
+    w = s["type"] == WALL
+    xw, yw = s["positions"][w].T
+    first = np.isclose(yw, -0.5 * dx) & (np.abs(xw - 0.25) < 0.15)
+    assert s["p"][w][first].mean() == pytest.approx(RHO0 * G * (Hw + 0.5 * dx), rel=0.03)
+    assert (s["U"][w] == 0.0).all()
+
+
+def test_backend_cuda_refuses_mdbc_by_name(tutorial):
+    """mDBC's hooks have no device form: backend cuda names the model and its hooks."""
+    from sphfoam.assemble import selection
+    from sphfoam.engine.cuda.build import refusals
+
+    sel = selection(Case(tutorial("damBreak", {
+        "constant/sphProperties:boundary": {"type": "mDBC"}})))
+    assert refusals(sel) == ["boundary 'mDBC': its run-time hooks (attach, after_sort, "
+                             "before_evaluation) run on host arrays (no device form)"]
