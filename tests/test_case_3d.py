@@ -65,13 +65,12 @@ def test_the_3d_tutorial_case_validates_and_sets_up_in_three_dimensions(tmp_path
     assert np.allclose(st.m[fluid], st.rho[fluid] * 0.02 ** 3)
 
 
-@pytest.mark.parametrize("boundary", ["stationaryGhosts", "adami", "mDBC",
+@pytest.mark.parametrize("boundary", ["stationaryGhosts", "adami",
                                       "mirrorGhosts; pressure hydrostatic"])
 def test_a_3d_tank_run_stays_hydrostatic_and_writes_3d_time_directories(tmp_path, boundary):
     """hydrostaticTank3D at H/dx = 10 for 0.05 s through sphfoam.run, with DualSPHysics'
     stationary ghosts, with Adami's generalised wall (no slip, AHA12 eqs. (22), (27) over
-    the 3-D neighbours), with mDBC's (English et al. 2022: the fit at the ghost nodes across
-    faces, edges and vertices) and with mirrored ghosts across the tank's faces (edge and vertex
+    the 3-D neighbours) and with mirrored ghosts across the tank's faces (edge and vertex
     ghosts, hydrostatic ghost pressure): the bed pressure (the line through the column's
     pressure, as bedPressure.py) within 2 % of rho g H, the water at rest, the time
     directories 3-D vectors read back bit for bit; Adami's wall particles keep their
