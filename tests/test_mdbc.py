@@ -92,6 +92,17 @@ def _edit(path, pattern, repl):
     path.write_text(new)
 
 
+def _mdbc_3d(tutorial, regions: str):
+    """hydrostaticTank3D with mDBC walls and the particleDict (dx = 0.05 m) holding
+    ``regions`` (its fluid and walls entries)."""
+    case = tutorial("hydrostaticTank3D")
+    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type mDBC;")
+    (case / "system" / "particleDict").write_text(
+        "FoamFile { version 2.0; format ascii; class dictionary; object particleDict; }\n"
+        "dimension 3; dx 0.05;\n" + regions)
+    return case
+
+
 def test_3d_ghost_nodes_mirror_each_wall_particle_across_the_wall(tutorial):
     """The set-up's ghost nodes in 3-D: a tank's face particle is mirrored across its face
     (the node as far in front as the particle is behind), an edge or vertex particle across
@@ -99,16 +110,12 @@ def test_3d_ghost_nodes_mirror_each_wall_particle_across_the_wall(tutorial):
     face, never its bottom (which stands on the floor)."""
     from sphfoam.setup.initial import generate_case
 
-    case = tutorial("hydrostaticTank3D")
-    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type mDBC;")
-    (case / "system" / "particleDict").write_text(
-        "FoamFile { version 2.0; format ascii; class dictionary; object particleDict; }\n"
-        "dimension 3; dx 0.05;\n"
-        "fluid { water { type box; min (0.35 0 0); max (0.6 0.6 0.2); } }\n"
-        "walls {\n"
-        "    tank  { type box; min (0 0 0); max (0.6 0.6 0.4); layers 3; open top; }\n"
-        "    block { type block; min (0.1 0.1 0); max (0.3 0.3 0.15); layers 3; }\n"
-        "}\n")
+    case = _mdbc_3d(tutorial,
+                    "fluid { water { type box; min (0.35 0 0); max (0.6 0.6 0.2); } }\n"
+                    "walls {\n"
+                    "    tank  { type box; min (0 0 0); max (0.6 0.6 0.4); layers 3; open top; }\n"
+                    "    block { type block; min (0.1 0.1 0); max (0.3 0.3 0.15); layers 3; }\n"
+                    "}\n")
     st = generate_case(Case(case))
     w = st.kind == WALL
     pos = np.column_stack(st.positions)[w]
@@ -148,15 +155,11 @@ def test_mdbc_refuses_3d_walls_without_ghost_nodes_by_name(tutorial):
     wall with mDBC is refused, naming the file, the wall and the model."""
     from sphfoam.case.errors import CaseError
 
-    case = tutorial("hydrostaticTank3D")
-    _edit(case / "constant" / "sphProperties", r"type\s+stationaryGhosts;", "type mDBC;")
-    (case / "system" / "particleDict").write_text(
-        "FoamFile { version 2.0; format ascii; class dictionary; object particleDict; }\n"
-        "dimension 3; dx 0.05;\n"
-        "fluid { w { type box; min (0 0 0); max (0.4 0.4 0.2); } }\n"
-        "walls { tank { type box; min (0 0 0); max (0.4 0.4 0.4); }\n"
-        "        post { type cylinder; point1 (0.2 0.2 0); point2 (0.2 0.2 0.3); "
-        "radius 0.05; } }\n")
+    case = _mdbc_3d(tutorial,
+                    "fluid { w { type box; min (0 0 0); max (0.4 0.4 0.2); } }\n"
+                    "walls { tank { type box; min (0 0 0); max (0.4 0.4 0.4); }\n"
+                    "        post { type cylinder; point1 (0.2 0.2 0); point2 (0.2 0.2 0.3); "
+                    "radius 0.05; } }\n")
     with pytest.raises(CaseError, match=r"system/particleDict.*walls.post.type: mDBC reads "
                                         r"ghost nodes, which the 3-D set-up writes for box "
                                         r"and block walls only"):

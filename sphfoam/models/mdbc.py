@@ -341,17 +341,18 @@ class ModifiedDynamic(Boundary):
         grid = (cells.x0, cells.y0, cells.z0, 1.0 / cells.cell_size, cells.ncx, cells.ncy,
                 cells.ncz if three else 1, cells.lx, cells.ly, cells.lz if three else 0.0,
                 cells.cell_size ** 2)
-        counts = np.zeros(len(walls) + 1, dtype=np.int64)
+        starts = np.zeros(len(walls) + 1, dtype=np.int64)      # the counts, then their sum
         ghost_lists(walls, gx, gy, gz, st.x, st.y, z, st.kind, cells.cell_start, *grid,
-                    counts[:-1], False, counts[:0])
-        starts = np.zeros(len(walls) + 1, dtype=np.int64)
-        np.cumsum(counts[:-1], out=starts[1:])
+                    starts[1:], False, starts[:0])
+        np.cumsum(starts, out=starts)
         idx = np.empty(int(starts[-1]), dtype=np.int64)
         ghost_lists(walls, gx, gy, gz, st.x, st.y, z, st.kind, cells.cell_start, *grid,
                     starts[:-1].copy(), True, idx)
+        # the fit's scratch, kept while the number of fitted wall particles stays
+        work = self._lists[-1] if self._lists is not None and \
+            len(self._lists[-1]) == len(walls) else np.zeros((len(walls), 4, 5))
         self._lists = (walls, np.ascontiguousarray(ox[walls]), np.ascontiguousarray(oy[walls]),
-                       np.ascontiguousarray(oz[walls]) if three else ox[:0], starts, idx,
-                       np.zeros((len(walls), 4, 5)))
+                       np.ascontiguousarray(oz[walls]) if three else ox[:0], starts, idx, work)
         self._sum = None
 
     def before_evaluation(self, run):
