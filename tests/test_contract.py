@@ -181,7 +181,8 @@ def test_engine_and_runner_name_no_model():
 
 def test_generated_loops_follow_the_neighbour_kinds():
     """A repulsive wall enters only the viscous (no-slip) and force terms; a free-slip one
-    only the force; stationary ghosts enter everything (no branch at all)."""
+    only the force; stationary ghosts enter everything (no branch at all), and with
+    ``noSlip no`` everything but the viscous term."""
     ghosts = source(selection())
     rep = source(selection(boundary={"type": "repulsiveMonaghanKos"}))
     slip = source(selection(boundary={"type": "repulsiveMonaghanKos", "noSlip": False}))
@@ -194,6 +195,12 @@ def test_generated_loops_follow_the_neighbour_kinds():
     s = rates(slip)
     wall_part = s[s.index("else:", s.index("if kindb == FLUID:")):]
     assert "f_viscosity" not in wall_part.split("s_ab")[0]
+    # stationary ghosts with noSlip no: wet walls in every term but the viscous one
+    wet = rates(source(selection(boundary={"type": "stationaryGhosts", "noSlip": False})))
+    fluid_part = wet[wet.index("if kindb == FLUID:"):wet.index("else:", wet.index("if kindb == FLUID:"))]
+    wall_part = wet[wet.index("else:", wet.index("if kindb == FLUID:")):]
+    assert "f_viscosity" in fluid_part and "f_viscosity" not in wall_part.split("s_ab")[0]
+    assert "acc_x" in wall_part.split("s_ab")[0]                 # the pressure term stays
 
 
 def test_the_kernel_value_is_computed_only_where_read():

@@ -14,8 +14,10 @@ import pytest
 
 import sphfoam
 from sphfoam import registry
+from sphfoam.case.edit import set_entry
 from sphfoam.case.case import Case
 from sphfoam.case.errors import CaseError
+from sphfoam.engine.state import FLUID
 from sphfoam.sampling.waves import surface_elevation, surface_elevation_3d
 
 TUTORIALS = Path(__file__).resolve().parent.parent / "tutorials"
@@ -308,6 +310,22 @@ def test_forces_2d_on_a_wall_a_block_and_the_tank(tmp_path):
     assert np.all(r["left"][:, 2][:2] == 0.0)    # 2-D: no z force
     both = _fo(c, {"type": "forces", "patches": ["left", "block"]}).measure(st)
     assert np.allclose(both, r["left"] + r["block"], rtol=1e-12, atol=1e-9)
+
+
+def test_forces_viscous_part_is_zero_on_free_slip_stationary_ghosts(tmp_path):
+    """The water moving along the bed at 0.3 m/s: stationary ghosts rub (a viscous force
+    along the motion on the tank); with ``noSlip no`` they do not, and ``forces`` writes a
+    viscous force of exactly 0 while the pressure force is the same."""
+    c, st = _setup(_case(tmp_path, "hydrostaticTank", "a", TANK2D))
+    st.u[st.kind == FLUID] = 0.3
+    rub = _fo(c, {"type": "forces", "patches": ["tank"]}).measure(st)
+    set_entry(c.path, "constant/sphProperties", "boundary.noSlip", False)
+    c2 = Case(c.path)
+    c2.validate()
+    slip = _fo(c2, {"type": "forces", "patches": ["tank"]}).measure(st)
+    assert rub[1, 0] > 1.0                                # N/m along the motion
+    assert np.all(slip[1] == 0.0) and np.all(slip[3] == 0.0)
+    assert np.array_equal(slip[0], rub[0])
 
 
 def test_forces_3d_block_and_tank_and_the_output_through_a_run(tmp_path):

@@ -159,7 +159,7 @@ class Plan:
                 raise T.ContractError(f"{t.owner.family} {t.owner.name!r} has no {sel.dim}-D "
                                       f"form (term {t.name!r} has code for "
                                       f"{', '.join(f'{d}-D' for d in t.dims) or 'no dimension'})")
-        self.kinds, self.viscous_dry_walls = self._kinds()
+        self.kinds, self.viscous_dry_walls, self.viscous_wet_walls = self._kinds()
         self.fields = []
         for m in self.models:
             for f in m.fields_in(sel.dim):
@@ -182,11 +182,14 @@ class Plan:
     def _kinds(self):
         kinds: dict[str, str] = {"fluid": "{kind} == FLUID"}
         owners: dict[str, object] = {}
-        viscous_dry = False
+        viscous_dry, viscous_wet = False, True
         for m in self.models:
             for k, cond in m.neighbour_kinds().items():
                 if k == "viscousWall":
                     viscous_dry = bool(cond)
+                    continue
+                if k == "viscousWetWall":
+                    viscous_wet = bool(cond)
                     continue
                 if k not in T.NEIGHBOUR_KINDS or k == "fluid":
                     raise T.ContractError(f"{m.family} {m.name!r} defines the neighbour kind "
@@ -202,7 +205,7 @@ class Plan:
         if rest and rest[0] != present[-1]:
             raise T.ContractError(f"the neighbour kind {rest[0]!r} is defined as 'every other "
                                   "particle' but is not the last kind")
-        return {k: kinds[k] for k in present}, viscous_dry
+        return {k: kinds[k] for k in present}, viscous_dry, viscous_wet
 
     @property
     def complete(self) -> bool:
@@ -215,6 +218,8 @@ class Plan:
             if s == "viscousWall":
                 if self.viscous_dry_walls and "dryWall" in self.kinds:
                     out.add("dryWall")
+            elif s == "wetWall" and t.viscous and not self.viscous_wet_walls:
+                continue
             elif s == "all" or s in self.kinds:
                 out.add(s)
         return out

@@ -148,6 +148,9 @@ class Term:
     #: of two non-fluid particles then adds nothing this term keeps, and the neighbour list
     #: may leave such pairs out (``Plan.fluid_pairs_only``)
     nonfluid_discarded: bool = False
+    #: True for a momentum diffusion term (a viscosity's pair term, the SPS stress): wet wall
+    #: particles enter it only at a no-slip boundary (``Plan.viscous_wet_walls``)
+    viscous: bool = False
     #: True when the pair code is a multiple of the pair's relative velocity (``U@c_ab``, e.g.
     #: the continuity equation's v_ab . grad W): it adds exactly 0 for two particles of one
     #: velocity, so with every wall still (``Selection.still_walls``) a pair of two wall

@@ -77,6 +77,11 @@ class Boundary(PipelineModel):
         return self.wall_fields
 
 
+class _NoSlip(Coeffs):
+    noSlip: bool = Field(True, description="wall particles enter the viscous term (no-slip, "
+                         "as in the thesis); no: free-slip")
+
+
 @register
 class StationaryGhosts(Boundary):
     """Violeau & Issa (2007): fixed rows of wall particles with evolving density.
@@ -84,22 +89,22 @@ class StationaryGhosts(Boundary):
     The wall particles never move; their density obeys the same continuity equation as the
     fluid, by symmetry of the pairs they form with fluid particles (T §3.8), their pressure
     follows from the equation of state, and fluid particles feel them through the ordinary
-    pressure and viscous terms. Zero wall velocity gives a no-slip wall.
+    pressure and viscous terms. Zero wall velocity gives a no-slip wall; with ``noSlip no``
+    the wall particles stay out of the viscous terms (the viscosity's and the SPS stress),
+    a free-slip wall: DualSPHysics' DBC with ViscoBoundFactor 0.
     """
 
     name = "stationaryGhosts"
     doc = "fixed wall-particle rows whose density evolves by pairing with fluid, T §3.8"
     keeps_wall_velocity = True
 
+    class Coeffs(_NoSlip):
+        pass
+
     def neighbour_kinds(self):
-        """Every wall particle is wet: it enters every term as a fluid particle would, and
-        its density evolves by the continuity equation."""
-        return {"wetWall": "else"}
-
-
-class _NoSlip(Coeffs):
-    noSlip: bool = Field(True, description="wall particles enter the viscous term (no-slip, "
-                         "as in the thesis); no: free-slip")
+        """Every wall particle is wet: it enters every term as a fluid particle would (the
+        viscous ones only no-slip), and its density evolves by the continuity equation."""
+        return {"wetWall": "else", "viscousWetWall": self.coeffs.noSlip}
 
 
 #: wall normal of neighbour b and the normal / tangential distances of a from it; a corner

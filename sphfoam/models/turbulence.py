@@ -182,7 +182,7 @@ acc_y += mb * (sps_xy * gWx + sps_yy * gWy)"""
         out = [velocity_gradient_term("sps", stress, self._TAU),
                Term("spsStress", ("rates",), init=init, pair=pair,
                     reads={d: ("gradW", *tau) for d, tau in self._TAU.items()},
-                    writes=("acc",))]
+                    writes=("acc",), viscous=True)]
         if self.wall_law != "none":
             out.append(wl.wall_law_term(self.wall_law))
         return out

@@ -12,7 +12,7 @@ from sphfoam.models.base import CaseContext, PipelineModel
 from sphfoam.registry import Coeffs, register
 
 
-#: viscous terms see fluid, ghosts, wet walls and, at a no-slip boundary, dry walls
+#: viscous terms see fluid, ghosts and, at a no-slip boundary, wet and dry walls
 VISCOUS_SEES = ("fluid", "ghost", "wetWall", "viscousWall")
 
 
@@ -33,12 +33,12 @@ class Viscosity(PipelineModel):
     def terms(self):
         if self.force_code:
             return [Term("viscosity", ("rates",), init=self.init_code, force=self.force_code,
-                         sees=VISCOUS_SEES, reads=self.reads, writes=("acc",))]
+                         sees=VISCOUS_SEES, reads=self.reads, writes=("acc",), viscous=True)]
         if not self.pair_code:
             return []
         return [Term("viscosity", ("rates",), init=self.init_code, pair=self.pair_code,
                      sees=VISCOUS_SEES, reads=self.reads, writes=("acc",),
-                     reaction=self.reaction_code)]
+                     reaction=self.reaction_code, viscous=True)]
 
 
 @register
