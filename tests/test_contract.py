@@ -203,6 +203,24 @@ def test_generated_loops_follow_the_neighbour_kinds():
     assert "acc_x" in wall_part.split("s_ab")[0]                 # the pressure term stays
 
 
+def test_free_slip_stationary_ghosts_leave_the_wet_walls_out_of_every_viscous_term():
+    """With ``noSlip no`` the viscosity's term and the SPS stress see no wet wall; every
+    other term sees them as before; ``noSlip yes`` (the default) changes nothing."""
+    for visc in ({"type": "artificial"}, {"type": "laminar"}):
+        sees = {}
+        for no_slip in (True, False):
+            plan = Plan(selection(viscosity=visc, turbulence={"type": "smagorinskySPS"},
+                                  boundary={"type": "stationaryGhosts", "noSlip": no_slip}))
+            sees[no_slip] = {t.name: plan.sees(t) for t in plan.terms}
+        for name, seen in sees[True].items():
+            t_free = sees[False][name]
+            if name in ("viscosity", "spsStress"):
+                assert "wetWall" in seen and "wetWall" not in t_free, name
+            else:
+                assert t_free == seen, name
+        assert {"viscosity", "spsStress"} <= set(sees[True])
+
+
 def test_the_kernel_value_is_computed_only_where_read():
     plain = source(selection())
     xsph = source(selection(velocityCorrection={"type": "xsph"}))
