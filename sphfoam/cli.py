@@ -425,6 +425,17 @@ def study(studydict: Path = typer.Argument(..., help="study dictionary"),
     console.print(escape_((s.root / "study.md").read_text()) if rows else "no results yet")
 
 
+def _metrics_or_hint(mset, path, keep_going):
+    """The metrics; a metric that cannot be evaluated stops them with a hint at -k."""
+    from sphfoam.case.errors import CaseError, Problem
+
+    try:
+        return mset.evaluate(path, strict=not keep_going)
+    except CaseError as e:
+        raise CaseError([*e.problems, Problem(
+            "sphfoam metrics --keep-going", "", "shows the other metrics, these as NaN")])
+
+
 @app.command()
 @_guarded
 def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
@@ -441,7 +452,7 @@ def metrics(case: Path = typer.Argument(Path("."), help="case directory"),
 
     c = _case(case)
     mset = _guard(load_metrics, c.path)
-    values = _guard(mset.evaluate, c.path, strict=not keep_going)
+    values = _guard(_metrics_or_hint, mset, c.path, keep_going)
     if as_json:
         import json
 

@@ -420,6 +420,7 @@ def test_cli_prints_the_table(flume):
     write_metrics(flume, {"H17": {"type": "waveHeight", "x": 17}})
     res = runner.invoke(app, ["metrics", str(flume)])
     assert res.exit_code == 2 and "system/metricsDict" in res.output
+    assert "--keep-going" in res.output                         # the hint at -k
     res = runner.invoke(app, ["metrics", "-k", str(flume)])
     assert res.exit_code == 0 and "nan" in res.output
 
