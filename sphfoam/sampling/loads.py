@@ -256,7 +256,8 @@ class Forces(FunctionObject):
     * viscous: the case's viscosity on the same pairs (``artificial``: -m_a m_b Pi_ab
       grad_a W_ab; ``laminar``: Morris's m_a m_b (mu_a + mu_b)/(rho_a rho_b)
       r_ab.grad_a W_ab/(r_ab^2 + 0.01 h^2) v_ab; ``none``: 0), c from the equation of
-      state; 0 on stationary ghosts with ``noSlip no``;
+      state; 0 where the boundary keeps its walls out of the viscous terms (stationary
+      ghosts with ``noSlip no``);
 
     moments M = sum_a (r_a - CofR) x F_a. These are exactly the forces that the fluid's
     momentum equation receives from those walls, with the sign reversed. Other momentum
@@ -311,7 +312,7 @@ class Forces(FunctionObject):
             raise ValueError(f"forces: viscosity {v!r} has no forces form (have "
                              f"{', '.join(_VISCOUS_FORMS)})")
         self.pform, self.vform = _PRESSURE_FORMS[m], _VISCOUS_FORMS[v]
-        if b == "stationaryGhosts" and not sph["boundary"].coeffs.noSlip:
+        if not sph["boundary"].neighbour_kinds().get("viscousWetWall", True):
             self.vform = 0                      # free slip: no viscous pair with the wall
         self.alpha = float(getattr(sph["viscosity"].coeffs, "alpha", 0.0))
         self.body_ids: np.ndarray | None = None
