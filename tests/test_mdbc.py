@@ -20,10 +20,13 @@ from sphfoam.timeloop import run_case
 RHO0, G = 1000.0, 9.81
 
 
-def _fit(fluid, rho, wall, offset, dx, hdx=1.3, g=(0.0, 0.0, 0.0)):
+def _fit(fluid, rho, wall, offset, dx, hdx=1.3, g=(0.0, 0.0, 0.0), vel=None, U0=None,
+         corner=0.0):
     """mdbc.wall_density for one wall particle at ``wall`` with its ghost node at
     ``wall + offset``, over the fluid particles ``fluid`` (n, dim) of density ``rho`` and
-    volume dx^dim (Wendland C2, Tait with gamma 7, B = 1e5, c0 = 10)."""
+    volume dx^dim (Wendland C2, Tait with gamma 7, B = 1e5, c0 = 10). With ``vel`` (dim, n),
+    the fluid's velocities, the free-slip form: also the wall particle's velocity about the
+    prescribed ``U0`` (zero by default)."""
     dim = fluid.shape[1]
     pos = np.vstack([fluid, wall[None, :]])
     n = len(pos)
@@ -35,9 +38,21 @@ def _fit(fluid, rho, wall, offset, dx, hdx=1.3, g=(0.0, 0.0, 0.0)):
     off = [np.array([v]) for v in offset] + ([] if dim == 3 else [x[:0]])
     kernel = WendlandC2()
     det_min = mdbc.MIN_DETERMINANT * mdbc.full_support_determinant(kernel, hdx, dim)
+    slip = vel is not None
+    if slip:
+        uvw = [np.append(v, 0.0) for v in vel] + ([] if dim == 3 else [x[:0]])
+        U = np.zeros((3, 1))
+        U[:dim, 0] = U0 if U0 is not None else 0.0
+        out = np.zeros((3, 1))
+        extra = (True, *uvw, np.array([corner]), U, out)
+    else:
+        out = None
+        extra = (False, x[:0], x[:0], x[:0], x[:0], np.zeros((3, 0)), np.zeros((3, 0)))
     mdbc.wall_density(np.array([n - 1]), *off, np.array([0, n - 1]), np.arange(n - 1), x, y,
                       z, m, r, p, c, 0.0, 0.0, 0.0, hdx * dx, kernel.support, kernel.f_jit,
-                      det_min, RHO0, 1e5, 7.0, 10.0, *g, np.zeros((1, 4, 5)))
+                      det_min, RHO0, 1e5, 7.0, 10.0, *g, np.zeros((1, 4, 8)), *extra)
+    if slip:
+        return r[-1], p[-1], c[-1], out[:dim, 0]
     return r[-1], p[-1], c[-1]
 
 
@@ -83,6 +98,72 @@ def test_a_node_at_the_edge_of_the_water_takes_the_hydrostatic_zeroth_order():
     assert r == pytest.approx(RHO0 * (1.0 + p / 1e5) ** (1.0 / 7.0), rel=1e-14)
     r, _, _ = _fit(fluid, rho, np.array([5.0, -0.05]), (0.0, 0.1), dx)
     assert r == RHO0
+
+
+def _free_slip(ug, U, n):
+    """The free-slip wall velocity: the node's tangential part; its normal part mirrored
+    about the wall's where the water approaches (dn < 0), the wall's where it leaves."""
+    dn = (ug - U) @ n
+    return ug - (2.0 if dn < 0.0 else 1.0) * dn * n
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_free_slip_gives_the_wall_the_nodes_tangential_velocity(dim):
+    """``noSlip no``: the fluid's velocity, linear in space, is fitted at the ghost node
+    exactly (to round-off); the wall particle takes its tangential part, and its normal
+    part mirrored about the wall's prescribed velocity U where the water approaches the
+    wall (2-D here) and U's own where it leaves (3-D here); across a tilted wall (2-D) the
+    same along its normal; behind an edge or corner (``corner`` 1) each component along
+    the node's offset likewise."""
+    dx = 0.1
+    k = np.arange(-6, 7) * dx
+    up = (np.arange(6) + 0.5) * dx
+    grids = np.meshgrid(*([k] * (dim - 1) + [up]), indexing="ij")
+    fluid = np.column_stack([g.ravel() for g in grids])
+    rho = np.full(len(fluid), RHO0)
+    base = np.array([0.3, -0.2, 0.4][:dim])
+    grad = np.array([[0.5, -1.0, 2.0], [1.5, 0.25, -0.5], [-2.0, 1.0, 0.75]])[:dim, :dim]
+    vel = (base[:, None] + grad @ fluid.T)
+    wall = np.zeros(dim)
+    wall[-1] = -0.5 * dx
+    offset = np.zeros(dim)
+    offset[-1] = dx
+    n = offset / dx
+    ug = base + grad @ (wall + offset)
+    assert (ug[-1] < 0.0) == (dim == 2)          # 2-D: towards the wall; 3-D: away from it
+    _, _, _, uw = _fit(fluid, rho, wall, offset, dx, vel=vel)
+    np.testing.assert_allclose(uw, _free_slip(ug, 0.0 * ug, n), atol=1e-12)
+    assert uw[-1] == pytest.approx(-ug[-1] if dim == 2 else 0.0, abs=1e-12)
+    # a wall moving with U: about U's normal component
+    U = np.array([0.1, 0.2, -0.05][:dim])
+    _, _, _, uw = _fit(fluid, rho, wall, offset, dx, vel=vel, U0=U)
+    np.testing.assert_allclose(uw, _free_slip(ug, U, n), atol=1e-12)
+    # the no-slip form leaves the density's fit as it was
+    r0 = _fit(fluid, rho + fluid @ np.ones(dim), wall, offset, dx)[0]
+    r1 = _fit(fluid, rho + fluid @ np.ones(dim), wall, offset, dx, vel=vel)[0]
+    assert r0 == r1
+    if dim == 2:
+        # a wall tilted by 30 degrees, both ways: the node along its unit normal n
+        for sign in (1.0, -1.0):
+            n = np.array([-sign * np.sin(np.pi / 6), np.cos(np.pi / 6)])
+            off = 0.5 * dx * n
+            w0 = -0.5 * off
+            _, _, _, uw = _fit(fluid, rho, w0, off, dx, vel=vel)
+            np.testing.assert_allclose(uw, _free_slip(base + grad @ (w0 + off), 0 * n, n),
+                                       atol=1e-12)
+    # behind an edge (a corner in 2-D): the node across both planes, each component
+    offset = np.zeros(dim)
+    offset[-1] = dx
+    offset[0] = dx
+    wall = np.zeros(dim)
+    wall[-1] = -0.5 * dx
+    wall[0] = -6.0 * dx - 0.5 * dx
+    _, _, _, uw = _fit(fluid, rho, wall, offset, dx, vel=vel, corner=1.0)
+    ug = base + grad @ (wall + offset)
+    expect = ug.copy()
+    for c in (0, dim - 1):
+        expect[c] = -ug[c] if ug[c] < 0.0 else 0.0
+    np.testing.assert_allclose(uw, expect, atol=1e-12)
 
 
 def _edit(path, pattern, repl):
@@ -228,15 +309,17 @@ def test_a_3d_tank_on_mdbc_walls_holds_the_column(tutorial):
     assert np.all(np.abs(np.array(beds) - 1.0) < 0.03)
 
 
+@pytest.mark.parametrize("no_slip", [True, False], ids=["noSlip", "freeSlip"])
 @pytest.mark.parametrize("integrator", ["monaghan2007", "predictorCorrector", "verlet",
                                         "symplectic"])
-def test_mdbc_walls_hold_the_dam_break_under_each_integrator(tutorial, integrator):
-    """The dam break at H0/dx = 10 to 0.15 s on mDBC walls under each integrator (the hooks
-    run before every equation of state, rates and density pass): no water leaves, nobody
-    crosses the bed or the end walls, and the wall particles stay where they were set up
-    with their velocity zero, bit for bit."""
+def test_mdbc_walls_hold_the_dam_break_under_each_integrator(tutorial, integrator, no_slip):
+    """The dam break at H0/dx = 10 to 0.15 s on mDBC walls, no-slip and free slip, under
+    each integrator (the hooks run before every equation of state, rates and density pass;
+    free slip sets the wall velocities for the pair passes and puts them back after): no
+    water leaves, nobody crosses the bed or the end walls, and the wall particles stay where
+    they were set up with their velocity zero (as written), bit for bit."""
     case = tutorial("damBreak", {
-        "constant/sphProperties:boundary": {"type": "mDBC"},
+        "constant/sphProperties:boundary": {"type": "mDBC", "noSlip": no_slip},
         "system/sphSchemes:integrator": {"type": integrator},
         "system/particleDict:dx": 0.025,
         "system/controlDict:endTime": 0.15,
@@ -265,3 +348,59 @@ def test_backend_cuda_refuses_mdbc_by_name(tutorial):
         "constant/sphProperties:boundary": {"type": "mDBC"}})))
     assert refusals(sel) == ["boundary 'mDBC': its run-time hooks (attach, after_sort, "
                              "before_evaluation) run on host arrays (no device form)"]
+
+
+@pytest.mark.parametrize("no_slip", [True, False], ids=["noSlip", "freeSlip"])
+def test_free_slip_mdbc_keeps_a_sliding_layers_momentum(no_slip):
+    """A layer 10 dx deep sliding at 0.5 m/s over three rows of mDBC wall particles,
+    periodic along the bed, no gravity, artificial viscosity 0.1, 300 steps (as the
+    stationary ghosts' test in test_boundaries.py). No slip (the walls' velocity zero in
+    the viscous term) the wall rubs: the layer loses 3-7 % of its momentum (4 %). Free slip
+    the wall particles take the fluid's tangential velocity at their nodes: the tangential
+    difference is gone from every pair and the momentum is kept to 1e-5; the walls stay put
+    (the integrator moves them with the prescribed velocity, zero)."""
+    from sphfoam import registry
+    from sphfoam.engine.build import build_pipeline
+    from sphfoam.engine.plan import Selection
+    from sphfoam.engine.simulation import Simulation
+    from sphfoam.engine.state import ParticleState
+    from sphfoam.models.base import CaseContext
+
+    dx, hdx, nx, ny, nw, u0 = 0.01, 1.3, 20, 10, 3, 0.5
+    h = hdx * dx
+    specs = dict(kernel={"type": "wendlandC2"},
+                 equationOfState={"type": "tait", "speedOfSound": 10.0},
+                 continuity={"type": "densityWeighted"}, momentum={"type": "colagrossiLandrini"},
+                 viscosity={"type": "artificial", "alpha": 0.1},
+                 boundary={"type": "mDBC", "noSlip": no_slip})
+    models = {f: registry.build(f, sp) for f, sp in specs.items()}
+    ctx = CaseContext(dx=dx, h=h, rho0=RHO0, nu=1e-6, g=(0.0, 0.0), fluid_height=ny * dx,
+                      c0=10.0)
+    lo, hi = (0.0, -nw * dx), (nx * dx, 2 * ny * dx)
+    pipe = build_pipeline(Selection(**models, periodic_x=True), ctx, domain_lo=lo,
+                          domain_hi=hi)
+    X, Y = np.meshgrid((np.arange(nx) + 0.5) * dx, (np.arange(-nw, ny) + 0.5) * dx)
+    x, y = X.ravel(), Y.ravel()
+    kind = np.where(y > 0, FLUID, WALL)
+    wall = kind == WALL
+    extra = {"ghostX": np.zeros(x.size), "ghostY": np.where(wall, -2.0 * y, 0.0),
+             "corner": np.zeros(x.size)}
+    st = ParticleState(x, y, np.where(kind == FLUID, u0, 0.0), np.zeros(x.size),
+                       np.full(x.size, RHO0), np.full(x.size, RHO0 * dx * dx), kind,
+                       extra=extra)
+    sim = Simulation(st, pipe, registry.build("integrator", {"type": "verlet"}), h=h,
+                     support=models["kernel"].support, domain_lo=lo, domain_hi=hi, beta=0.2,
+                     force_condition=True, adjust_time_step=True, delta_t=1e-4)
+    fluid = st.kind == FLUID
+    p0 = np.sum(st.m[fluid] * st.u[fluid])
+    for _ in range(300):
+        sim.step()
+    s = sim.state
+    kept = np.sum(s.m[s.kind == FLUID] * s.u[s.kind == FLUID]) / p0
+    if no_slip:
+        assert 0.93 < kept < 0.98
+    else:
+        assert abs(kept - 1.0) < 1e-5
+    walls = s.kind == WALL
+    assert np.all(s.x[walls] == x[s.id[walls]]) and np.all(s.y[walls] == y[s.id[walls]])
+    assert np.all(s.u[walls] == 0.0) and np.all(s.v[walls] == 0.0)

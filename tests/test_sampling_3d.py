@@ -328,6 +328,46 @@ def test_forces_viscous_part_is_zero_on_free_slip_stationary_ghosts(tmp_path):
     assert np.array_equal(slip[0], rub[0])
 
 
+BED2D = """dx 0.02;
+fluid { water { type box; min (0 0); max (0.5 0.2); } }
+walls {
+  bed { type polyline; points ((-0.06 0) (0.56 0)); side right; layers 3; }
+  sides { type box; min (0 -0.06); max (0.5 0.6); layers 3; open (top bottom); }
+}
+"""
+
+
+def test_forces_on_free_slip_mdbc_walls_read_the_velocities_the_passes_see(tmp_path):
+    """The water moving along the bed at 0.3 m/s over mDBC walls, ``forces`` on the bed
+    through a simulation (``execute``, after a step): no slip the wall particles' velocity
+    is zero and the bed rubs (a viscous force along the motion); free slip the passes give them the
+    water's tangential velocity at their nodes, and ``forces`` sees the same: the bed's
+    viscous force is gone but for the two corner columns, where a node across the corner
+    takes the side wall's normal velocity (under a tenth of the no-slip force)."""
+    from sphfoam.assemble import build_simulation
+
+    out = {}
+    for slip in (False, True):
+        case = _case(tmp_path, "hydrostaticTank", f"s{int(slip)}", BED2D)
+        set_entry(case, "constant/sphProperties", "boundary.type", "mDBC")
+        if slip:
+            set_entry(case, "constant/sphProperties", "boundary.noSlip", False)
+        c, st = _setup(case)
+        st.u[st.kind == FLUID] = 0.3
+        sim = build_simulation(c, st)
+        sim.step()                          # the neighbour list, and the nodes' lists
+        fo = _fo(c, {"type": "forces", "patches": ["bed"]}, name=f"bed{int(slip)}")
+        fo.execute(sim)
+        fo.end()
+        rows = np.loadtxt(fo.file)
+        out[slip] = rows
+        walls = sim.state.kind != FLUID
+        assert np.all(sim.state.u[walls] == 0.0)            # put back after the measurement
+    rub, free = out[False], out[True]
+    assert rub[7] > 1.0                                      # viscous_x, N/m along the motion
+    assert abs(free[7]) < 0.1 * rub[7]
+
+
 def test_forces_3d_block_and_tank_and_the_output_through_a_run(tmp_path):
     """3-D at H/dx 10: the block (0.16 x 0.16 x 0.12 m on the bed) carries
     -rho g (H - 0.12) A_top in z within 1 % (measured 0.05 %), the tank and the block the

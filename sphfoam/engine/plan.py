@@ -104,8 +104,8 @@ class Selection:
 
 #: the run-time hooks a model may implement (sphfoam.engine.context.RunContext)
 HOOKS = ("attach", "before_neighbours", "add_particles", "after_sort", "before_evaluation",
-         "after_rates", "after_density_rate", "walls_moved", "after_step", "keeps_neighbours",
-         "advection_velocity")
+         "before_passes", "after_rates", "after_density_rate", "walls_moved", "after_step",
+         "keeps_neighbours", "advection_velocity")
 
 
 def core_parameters(sel: Selection, ctx, domain_lo=(0.0, 0.0, 0.0),

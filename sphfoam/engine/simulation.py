@@ -163,8 +163,8 @@ class Simulation:
         self.planes = list(planes)
         self._hooks = {name: sel.hooks(name) for name in
                        ("before_neighbours", "add_particles", "after_sort",
-                        "before_evaluation", "after_rates", "after_density_rate",
-                        "walls_moved", "after_step", "keeps_neighbours")}
+                        "before_evaluation", "before_passes", "after_rates",
+                        "after_density_rate", "walls_moved", "after_step", "keeps_neighbours")}
         #: the models that make the advection velocity, applied in selection order, each to
         #: the previous one's result (XSPH, then a particle shifting)
         self._advection = sel.hooks("advection_velocity")
@@ -382,6 +382,7 @@ class Simulation:
         ``time_step_from_first_evaluation`` (``state.sigma`` keeps the first's)."""
         st = self.state
         self._run_hooks("before_evaluation")
+        self._run_hooks("before_passes")
         args = self._grid_args()
         self._prepass(args)
         sigma = True
@@ -399,6 +400,7 @@ class Simulation:
 
     def density_rate(self):
         self._run_hooks("before_evaluation")
+        self._run_hooks("before_passes")
         args = self._grid_args()
         self._prepass(args, "density")
         if self.half_lists and self._half is not None and \

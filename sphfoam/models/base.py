@@ -44,6 +44,9 @@ the walls; never the simulation itself:
                                    and without this hook gets a new list every step
 ``after_sort(run, order)``         after the particles were re-sorted by ``order``
 ``before_evaluation(run)``         before every evaluation of the pipeline (e.g. refresh ghosts)
+``before_passes(run)``             before the pair passes of every evaluation of the rates or
+                                   the density rate (not before the equation of state alone,
+                                   as output runs it): e.g. wall velocities the passes read
 ``after_rates(run)``               after every evaluation of the rates: may add a force to
                                    ``run.state.ax, ay`` (e.g. a wall shear stress)
 ``after_density_rate(run)``        after every density-only pass: may add to ``run.state.drho``
@@ -75,8 +78,8 @@ __all__ = ["CaseContext", "PipelineModel", "Term", "HOOK_NAMES"]
 
 #: the run-time hooks above
 HOOK_NAMES = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
-              "before_evaluation", "after_rates", "after_density_rate", "walls_moved",
-              "after_step",
+              "before_evaluation", "before_passes", "after_rates", "after_density_rate",
+              "walls_moved", "after_step",
               "advection_velocity", "summary")
 
 

@@ -26,8 +26,29 @@ the Shepard mean under a free surface is that of deeper water. A node with no fl
 the support leaves the particle at rho0, and the particle's density is held at rho0 at
 least: a wall never pulls the water, which would draw it into the wall (DualSPHysics holds
 its boundary particles so). Pressure and sound speed follow from the equation of state
-(Tait, T(3.27)). Wall velocities stay as set up (zero: no slip for the viscous term, as the
-original DBC).
+(Tait, T(3.27)).
+
+Wall velocities: with ``noSlip yes`` (the default) they stay as set up (zero: no slip for
+the viscous term, as the original DBC). With ``noSlip no`` (free slip; English et al. 2022
+use the no-slip form) each wall particle takes, for the pair passes, the tangential part of
+the fluid's velocity at its ghost node (from the same linear fit), and a normal part that
+pushes as the water's mirror image and pulls no more than a wall at rest:
+
+    u_w = u_g - c ((u_g - U_w) . n) n,    n = g_w / |g_w|,
+    c = 2 where (u_g - U_w) . n < 0 (the water approaches: the mirror image's normal
+    velocity, as for mirrored ghosts, T(3.78)), else 1 (it leaves: the wall's own)
+
+so that no pair with a wall particle sees a tangential velocity difference (no friction),
+water running at the wall is compressed and damped as by its mirror image, and water
+drawing away is not held back harder than by a wall at rest. mDBC's wall pressure is the
+water's own continued into the wall, near zero under a thin fast front: once the wall's
+friction is gone, the approach's compression is what holds such a front off the wall,
+while the mirror's expansion on leaving would tear water off convex edges. Behind an edge
+or a corner, where the node is the image across two or three planes, each component along
+which the offset runs is treated so. The velocity is set before the pair passes of every
+evaluation (the ``before_passes`` hook) and the prescribed one put back after them, so
+that the integrators move wall particles with it and output shows it. Measured (the 3-D
+dam break): docs/user-guide.md.
 
 The fluid sees the wall particles as neighbours of kind ``ghost``: every term treats them as
 fluid with the density set here. Compared with ``stationaryGhosts``, whose wall density
@@ -50,11 +71,12 @@ import math
 
 import numpy as np
 from numba import njit, prange
+from pydantic import Field
 
 from sphfoam.engine.state import FLUID, WALL
 from sphfoam.models.base import CaseContext
 from sphfoam.models.boundaries import Boundary
-from sphfoam.registry import register
+from sphfoam.registry import Coeffs, register
 
 #: the first-order fit is used where det of the normalised moment matrix is at least this
 #: fraction of a full support's (on the lattice of spacing dx)
@@ -125,11 +147,12 @@ def ghost_lists(walls, gx, gy, gz, x, y, z, kind, cell_start, x0, y0, z0, inv_ce
 
 
 @njit(**_JIT)
-def _solve(a, m):
-    """Solve the m x m system in a[:m, :m] with right-hand side a[:m, m] in place (Gaussian
-    elimination with partial pivoting); returns the matrix's determinant (0.0 for a singular
-    one, the system then unsolved)."""
+def _solve(a, m, nr):
+    """Solve the m x m system in a[:m, :m] with the ``nr`` right-hand sides a[:m, m:m + nr]
+    in place (Gaussian elimination with partial pivoting); returns the matrix's determinant
+    (0.0 for a singular one, the system then unsolved)."""
     det = 1.0
+    mc = m + nr
     for i in range(m):
         piv = i
         for r in range(i + 1, m):
@@ -138,7 +161,7 @@ def _solve(a, m):
         if a[piv, i] == 0.0:
             return 0.0
         if piv != i:
-            for c in range(m + 1):
+            for c in range(mc):
                 t = a[i, c]
                 a[i, c] = a[piv, c]
                 a[piv, c] = t
@@ -146,27 +169,52 @@ def _solve(a, m):
         det *= a[i, i]
         for r in range(i + 1, m):
             f = a[r, i] / a[i, i]
-            for c in range(i, m + 1):
+            for c in range(i, mc):
                 a[r, c] -= f * a[i, c]
-    for i in range(m - 1, -1, -1):
-        t = a[i, m]
-        for c in range(i + 1, m):
-            t -= a[i, c] * a[c, m]
-        a[i, m] = t / a[i, i]
+    for k in range(m, mc):
+        for i in range(m - 1, -1, -1):
+            t = a[i, k]
+            for c in range(i + 1, m):
+                t -= a[i, c] * a[c, k]
+            a[i, k] = t / a[i, i]
     return det
+
+
+@njit(**_JIT)
+def _normal(ug, U, g, tiny):
+    """A component of a free-slip wall particle's velocity behind an edge or a corner: the
+    node's (u_g) where the offset g has no part along it; along the offset, the node's
+    mirrored about the wall's (2 U - u_g) where the water there moves towards the wall,
+    else the wall's (U)."""
+    if abs(g) <= tiny:
+        return ug
+    if (ug - U) * g < 0.0:
+        return 2.0 * U - ug
+    return U
 
 
 @njit(parallel=True, **_JIT)
 def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, lz, h,
-                 support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work):
+                 support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work, slip, u,
+                 v, w, corner, U0, out_u):
     """English et al. (2022) eq. (10) for each wall particle ``walls[k]``: the linear fit of
     the fluid's density at its ghost node (offset ox, oy, oz from it) over the node's list
     ``idx[starts[k]:starts[k + 1]]``, extrapolated to the particle; where the fit is
     ill-conditioned, the node's zeroth order with the hydrostatic continuation to the particle
     (AHA12 eq. (27) with the node's weights); its p and c by Tait's equation. ``work``
-    (len(walls), 4, 5) is scratch."""
+    (len(walls), 4, 8) is scratch.
+
+    ``slip`` (free slip; otherwise u, v, w, corner, U0 and out_u may be empty): also the
+    fluid's velocity u_g at the node, from the same fit (the Shepard mean where it is
+    ill-conditioned, the prescribed U0 where no fluid is near); into ``out_u`` (dim,
+    len(walls)) its tangential part, and its normal part about the wall's mirrored where the
+    water approaches the wall and the wall's where it leaves: u_w = u_g - c ((u_g - U0) . n)
+    n, n = the unit offset to the node, c = 2 for (u_g - U0) . n < 0, else 1; behind an edge
+    or a corner (``corner`` > 0), where the node is the image across two or three planes,
+    each component along which the offset runs likewise (``_normal``)."""
     three = z.shape[0] > 0
     mm = 4 if three else 3
+    nv = (3 if three else 2) if slip else 0
     inv_h = 1.0 / h
     q2max = support * support
     for k in prange(walls.shape[0]):
@@ -175,7 +223,10 @@ def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, 
         py = y[a] + oy[k]
         pz = z[a] + oz[k] if three else 0.0
         s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
-        b0 = b1 = b2 = b3 = 0.0
+        b0 = b1 = b2 = b3 = 0.0             # rho
+        u0 = u1 = u2 = u3 = 0.0             # free slip: u, v, w
+        v0 = v1 = v2 = v3 = 0.0
+        w0 = w1 = w2 = w3 = 0.0
         for n in range(starts[k], starts[k + 1]):
             b = idx[n]
             rx = _wrap(x[b] - px, lx) * inv_h
@@ -200,22 +251,53 @@ def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, 
             b1 += vr * rx
             b2 += vr * ry
             b3 += vr * rz
-        w = work[k]
-        w[0, 0], w[0, 1], w[0, 2], w[1, 1], w[1, 2], w[2, 2] = s00, s01, s02, s11, s12, s22
-        w[0, mm], w[1, mm], w[2, mm] = b0, b1, b2
+            if slip:
+                vu = vw * u[b]
+                vv = vw * v[b]
+                u0 += vu
+                u1 += vu * rx
+                u2 += vu * ry
+                u3 += vu * rz
+                v0 += vv
+                v1 += vv * rx
+                v2 += vv * ry
+                v3 += vv * rz
+                if three:
+                    vz = vw * w[b]
+                    w0 += vz
+                    w1 += vz * rx
+                    w2 += vz * ry
+                    w3 += vz * rz
+        wk = work[k]
+        wk[0, 0], wk[0, 1], wk[0, 2], wk[1, 1], wk[1, 2], wk[2, 2] = s00, s01, s02, s11, s12, s22
+        wk[0, mm], wk[1, mm], wk[2, mm] = b0, b1, b2
         if three:
-            w[0, 3], w[1, 3], w[2, 3], w[3, 3], w[3, mm] = s03, s13, s23, s33, b3
-        s = w[0, 0]
+            wk[0, 3], wk[1, 3], wk[2, 3], wk[3, 3], wk[3, mm] = s03, s13, s23, s33, b3
+        if slip:
+            wk[0, mm + 1], wk[1, mm + 1], wk[2, mm + 1] = u0, u1, u2
+            wk[0, mm + 2], wk[1, mm + 2], wk[2, mm + 2] = v0, v1, v2
+            if three:
+                wk[3, mm + 1], wk[3, mm + 2] = u3, v3
+                wk[0, mm + 3], wk[1, mm + 3], wk[2, mm + 3], wk[3, mm + 3] = w0, w1, w2, w3
+        s = wk[0, 0]
+        # the zeroth order (Shepard) of the velocity at the node, before the solve
+        ug0 = wk[0, mm + 1] / s if slip and s > 0.0 else 0.0
+        ug1 = wk[0, mm + 2] / s if slip and s > 0.0 else 0.0
+        ug2 = wk[0, mm + 3] / s if slip and three and s > 0.0 else 0.0
         fit = False
         if s > 0.0:
             for i in range(mm):
                 for j in range(i):
-                    w[i, j] = w[j, i]
+                    wk[i, j] = wk[j, i]
             # the determinant of the moment matrix normalised by the kernel sum
-            fit = _solve(w, mm) / s ** mm >= det_min
+            fit = _solve(wk, mm, 1 + nv) / s ** mm >= det_min
         if fit:
-            r = w[0, mm] - (ox[k] * w[1, mm] + oy[k] * w[2, mm]
-                            + (oz[k] * w[3, mm] if three else 0.0)) * inv_h
+            r = wk[0, mm] - (ox[k] * wk[1, mm] + oy[k] * wk[2, mm]
+                             + (oz[k] * wk[3, mm] if three else 0.0)) * inv_h
+            if slip:
+                ug0 = wk[0, mm + 1]
+                ug1 = wk[0, mm + 2]
+                ug2 = wk[0, mm + 3] if three else 0.0
         elif s > 0.0:
             # the fluid's pressure continued hydrostatically to the particle, weighted at the
             # node: p_w = sum_f (p_f + rho_f g . (x_w - x_f)) V_f W / sum_f V_f W
@@ -243,21 +325,50 @@ def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, 
         ratio = r / rho0
         p[a] = B * (ratio ** gamma - 1.0)
         c[a] = c0 * ratio ** (0.5 * (gamma - 1.0))
+        if slip:
+            U0x, U0y = U0[0, k], U0[1, k]
+            U0z = U0[2, k] if three else 0.0
+            if s <= 0.0:
+                ug0, ug1, ug2 = U0x, U0y, U0z
+            gox, goy = ox[k], oy[k]
+            goz = oz[k] if three else 0.0
+            if corner[k] > 0.5:
+                tiny = 1e-9 * math.sqrt(gox * gox + goy * goy + goz * goz)
+                out_u[0, k] = _normal(ug0, U0x, gox, tiny)
+                out_u[1, k] = _normal(ug1, U0y, goy, tiny)
+                if three:
+                    out_u[2, k] = _normal(ug2, U0z, goz, tiny)
+            else:
+                inv = 1.0 / math.sqrt(gox * gox + goy * goy + goz * goz)
+                nx, ny, nz = gox * inv, goy * inv, goz * inv
+                dn = (ug0 - U0x) * nx + (ug1 - U0y) * ny + (ug2 - U0z) * nz
+                if dn < 0.0:
+                    dn *= 2.0
+                out_u[0, k] = ug0 - dn * nx
+                out_u[1, k] = ug1 - dn * ny
+                if three:
+                    out_u[2, k] = ug2 - dn * nz
 
 
 @njit(parallel=True, **_JIT)
-def state_sum(x, y, z, rho, kind):
-    """A sum of the positions and the fluid's densities: unchanged, nothing the wall
-    densities depend on has changed since they were computed (the equation of state and the
-    rates pass of one evaluation both call the hooks)."""
+def state_sum(x, y, z, rho, kind, u, v, w):
+    """A sum of the positions and the fluid's densities (and, where u is not empty, the
+    fluid's velocities): unchanged, nothing the wall state depends on has changed since it
+    was computed (the equation of state and the rates pass of one evaluation both call the
+    hooks)."""
     s = 0.0
     three = z.shape[0] > 0
+    vel = u.shape[0] > 0
     for a in prange(x.shape[0]):
         t = x[a] + 3.0 * y[a]
         if three:
             t += 7.0 * z[a]
         if kind[a] == FLUID:
             t += 11.0 * rho[a]
+            if vel:
+                t += 13.0 * u[a] + 17.0 * v[a]
+                if three:
+                    t += 19.0 * w[a]
         s += t
     return s
 
@@ -284,22 +395,35 @@ class ModifiedDynamic(Boundary):
     name = "mDBC"
     doc = ("modified dynamic boundary, English et al. (2022): wall-particle rows whose "
            "density is the fluid's linear fit at the ghost node (the mirror image across the "
-           "wall), extrapolated to the particle (eq. 10); p by the EOS")
-    keeps_wall_velocity = True
+           "wall), extrapolated to the particle (eq. 10); p by the EOS; no-slip (the wall's "
+           "velocity) or free slip (the node's tangential velocity, its normal one mirrored on "
+           "approach)")
     #: the hooks handle z in 3-D
     hook_dims = (2, 3)
 
+    class Coeffs(Coeffs):
+        noSlip: bool = Field(True, description=(
+            "the wall particles keep their prescribed velocity (zero: no slip, as the "
+            "original DBC); no: free slip, the fluid's tangential velocity at the ghost node, "
+            "its normal one mirrored where the water approaches the wall"))
+
+    @property
+    def keeps_wall_velocity(self) -> bool:
+        """No slip: the wall particles' velocities stay as set up; free slip sets them."""
+        return bool(self.coeffs.noSlip)
+
     @property
     def wall_fields(self) -> tuple[str, ...]:
-        """The vector from each wall particle to its ghost node (set-up)."""
-        return ("ghostX", "ghostY", "ghostZ")
+        """The vector from each wall particle to its ghost node (set-up); free slip also
+        reads the corner flag (a node across an edge or a corner)."""
+        return ("ghostX", "ghostY", "ghostZ") + (() if self.coeffs.noSlip else ("corner",))
 
     def params(self, ctx: CaseContext):
         return {}
 
     def neighbour_kinds(self):
-        """Every wall particle is a ghost: fluid to every term, with the density set here;
-        its own density does not evolve."""
+        """Every wall particle is a ghost: fluid to every term, with the density (and, free
+        slip, the velocity) set here; its own density does not evolve."""
         return {"ghost": "else"}
 
     # --- run-time hooks (sphfoam.models.base) ---------------------------------------------
@@ -320,6 +444,8 @@ class ModifiedDynamic(Boundary):
         self._g = (prm["gx"], prm["gy"], prm.get("gz", 0.0))
         self._lists = None
         self._sum = None
+        self._slip = not self.coeffs.noSlip
+        self._uw = self._U0 = None
 
     def after_sort(self, run, order):
         """The ghost nodes' lists of fluid particles, over the cell grid just sorted."""
@@ -350,26 +476,64 @@ class ModifiedDynamic(Boundary):
                     starts[:-1].copy(), True, idx)
         # the fit's scratch, kept while the number of fitted wall particles stays
         work = self._lists[-1] if self._lists is not None and \
-            len(self._lists[-1]) == len(walls) else np.zeros((len(walls), 4, 5))
+            len(self._lists[-1]) == len(walls) else np.zeros((len(walls), 4, 8))
+        corner = np.ascontiguousarray(st.extra["corner"][walls]) if self._slip else ox[:0]
         self._lists = (walls, np.ascontiguousarray(ox[walls]), np.ascontiguousarray(oy[walls]),
-                       np.ascontiguousarray(oz[walls]) if three else ox[:0], starts, idx, work)
+                       np.ascontiguousarray(oz[walls]) if three else ox[:0], starts, idx,
+                       corner, work)
         self._sum = None
 
     def before_evaluation(self, run):
-        """The wall particles' density, pressure and sound speed from their ghost nodes."""
+        """The wall particles' density, pressure and sound speed from their ghost nodes
+        (free slip: and the velocity the passes give them, ``before_passes``)."""
         if self._lists is None:
             return
         st = run.state
         three = st.dim == 3
         z = st.z if three else st.x[:0]
-        now = state_sum(st.x, st.y, z, st.rho, st.kind)
+        walls, ox, oy, oz, starts, idx, corner, work = self._lists
+        if self._slip:
+            u, v = st.velocities[:2]
+            w = st.velocities[2] if three else st.x[:0]
+        else:
+            u = v = w = st.x[:0]
+        now = state_sum(st.x, st.y, z, st.rho, st.kind, u, v, w)
         if now == self._sum:
             return
-        walls, ox, oy, oz, starts, idx, work = self._lists
         cells = run.cells
         rho0, B, gamma, c0 = self._eos
+        if self._slip:
+            # the prescribed velocities (zero, a wall's constant one or its motion's now)
+            U0 = np.array([uu[walls] for uu in st.velocities])
+            uw = np.empty_like(U0)
+        else:
+            U0 = uw = np.zeros((3, 0))
         wall_density(walls, ox, oy, oz, starts, idx, st.x, st.y, z, st.m, st.rho, st.p, st.c,
                      cells.lx, cells.ly, cells.lz if three else 0.0, run.h,
                      self._support, self._kernel_f, self._det_min, rho0, B, gamma, c0,
-                     *self._g, work)
+                     *self._g, work, self._slip, u, v, w, corner, U0, uw)
+        self._U0, self._uw = U0, uw
         self._sum = now
+
+    # the free-slip form's hooks (None with no slip): the nodes' tangential velocities are the
+    # wall particles' for the pair passes only; the prescribed ones are put back after them,
+    # before the integrator moves the walls and before anything is written or sampled
+    def _set_velocity(self, run, which):
+        if self._lists is not None and which is not None:
+            walls = self._lists[0]
+            for u, uw in zip(run.state.velocities, which):
+                u[walls] = uw
+
+    @property
+    def before_passes(self):
+        if self.coeffs.noSlip:
+            return None
+        return lambda run: self._set_velocity(run, self._uw)
+
+    @property
+    def after_rates(self):
+        if self.coeffs.noSlip:
+            return None
+        return lambda run: self._set_velocity(run, self._U0)
+
+    after_density_rate = after_rates

@@ -256,8 +256,9 @@ class Forces(FunctionObject):
     * viscous: the case's viscosity on the same pairs (``artificial``: -m_a m_b Pi_ab
       grad_a W_ab; ``laminar``: Morris's m_a m_b (mu_a + mu_b)/(rho_a rho_b)
       r_ab.grad_a W_ab/(r_ab^2 + 0.01 h^2) v_ab; ``none``: 0), c from the equation of
-      state; 0 where the boundary keeps its walls out of the viscous terms (stationary
-      ghosts with ``noSlip no``);
+      state, and the wall velocities the pair passes see (mDBC with ``noSlip no``: the
+      ghost nodes' velocities mirrored); 0 where the boundary keeps its walls out of the
+      viscous terms (stationary ghosts with ``noSlip no``);
 
     moments M = sum_a (r_a - CofR) x F_a. These are exactly the forces that the fluid's
     momentum equation receives from those walls, with the sign reversed. Other momentum
@@ -399,7 +400,15 @@ class Forces(FunctionObject):
 
     def execute(self, sim):
         _current_pressure(sim)
-        r = self.measure(sim.state)
+        bnd = self.case.models.sph["boundary"]
+        run = getattr(sim, "context", None)
+        if run is not None and bnd.implements("before_passes"):
+            # the wall velocities the pair passes see (mDBC with free slip), put back after
+            bnd.before_passes(run)
+            r = self.measure(sim.state)
+            bnd.after_rates(run)
+        else:
+            r = self.measure(sim.state)
         for fh, p, v in ((self._fh, r[0], r[1]), (self._mh, r[2], r[3])):
             fh.write("\t".join(f"{x:.9g}" for x in (sim.time, *(p + v), *p, *v)) + "\n")
             fh.flush()

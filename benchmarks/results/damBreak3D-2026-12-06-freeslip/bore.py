@@ -2,6 +2,8 @@
 mean level over 0.5-2.5 s, and when the return bore passes H3 and H4.
 
     python bore.py RUN ...      (a heightsWire.dat, or a folder holding one)
+    python bore.py --level RUN ...  the mean error (simulated - measured) of each gauge over
+                                    3.2-6 s instead: the late level
 
 The bore's arrival at a gauge is the first time after t0 (H3: 1.85 s, H4: 2.4 s) that the
 height exceeds its lowest value over t0 ... t0 + 0.6 s by 0.06 m.
@@ -23,6 +25,13 @@ def arrival(t, h, t0, rise=0.06):
     return tt[up[0]] if up.size else np.nan
 
 
+def level(name, t, hs, te, meas):
+    late = (te >= 3.2) & (te <= min(6.0, t[-1]))
+    err = [np.mean(np.interp(te, t, np.nan_to_num(h))[late] - m[late]) for h, m in
+           zip(hs, meas)]
+    print(f"{name:<28}" + " ".join(f"{e:+6.3f}" for e in err) + f" | {np.mean(err):+.3f}")
+
+
 def row(name, t, hs, te, meas):
     rms = []
     for h, m in zip(hs, meas):
@@ -35,17 +44,20 @@ def row(name, t, hs, te, meas):
           f"{arrival(t, hs[3], 2.4):.2f}")
 
 
-def main(folders):
+def main(args):
     e = np.loadtxt(MEASURED, skiprows=1)
     te = e[:, 0]
     meas = [e[:, 11], e[:, 10], e[:, 9], e[:, 12]]   # H1, H2, H3, H4 (labels swapped)
+    late = "--level" in args
+    folders = [a for a in args if a != "--level"]
     print(f"{'run':<28}" + " ".join(f"{g:>6}" for g in ("H1", "H2", "H3", "H4"))
-          + " | H4 0.5-2.5 s  bore at H3  at H4")
-    row("measured", te, meas, te, meas)
+          + (" | mean error 3.2-6 s (m)" if late else " | H4 0.5-2.5 s  bore at H3  at H4"))
+    if not late:
+        row("measured", te, meas, te, meas)
     for f in folders:
         path = Path(f) if Path(f).is_file() else Path(f) / "heightsWire.dat"
         d = np.loadtxt(path)
-        row(str(f), d[:, 0], [d[:, i] for i in range(1, 5)], te, meas)
+        (level if late else row)(str(f), d[:, 0], [d[:, i] for i in range(1, 5)], te, meas)
 
 
 if __name__ == "__main__":

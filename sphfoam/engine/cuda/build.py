@@ -22,8 +22,8 @@ CORE = ("h", "inv_h", "support2", "eta2", "gx", "gy")
 #: (``sphfoam.engine.hookforms``, :mod:`sphfoam.engine.cuda.hooks`) or through the model's
 #: device form (:mod:`sphfoam.engine.cuda.forms`)
 _HOOKS = ("attach", "before_neighbours", "add_particles", "keeps_neighbours", "after_sort",
-          "before_evaluation", "after_rates", "after_density_rate", "walls_moved",
-          "after_step", "advection_velocity", "summary")
+          "before_evaluation", "before_passes", "after_rates", "after_density_rate",
+          "walls_moved", "after_step", "advection_velocity", "summary")
 
 
 class Unsupported(ValueError):
