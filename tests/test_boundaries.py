@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import set_entry
+from conftest import set_entry, sliding_layer
 
 from sphfoam import registry
 from sphfoam.case.case import Case
@@ -308,32 +308,7 @@ def test_stationary_ghosts_free_slip_keeps_a_sliding_layers_momentum(no_slip):
     the wall rubs: the layer loses 4 % of its momentum (a viscous layer sqrt(nu t) of about
     a dx, nu = alpha h c0 / 8). With ``noSlip no`` the walls push but do not rub: the
     momentum is kept to 1e-5 (the pressure pairs' tangential parts cancel along the lattice)."""
-    nx, ny, nw, u0 = 20, 10, 3, 0.5
-    specs = dict(kernel={"type": "wendlandC2"},
-                 equationOfState={"type": "tait", "speedOfSound": 10.0},
-                 continuity={"type": "densityWeighted"}, momentum={"type": "colagrossiLandrini"},
-                 viscosity={"type": "artificial", "alpha": 0.1},
-                 boundary={"type": "stationaryGhosts", "noSlip": no_slip})
-    models = {f: registry.build(f, sp) for f, sp in specs.items()}
-    ctx = CaseContext(dx=DX, h=H, rho0=RHO0, nu=1e-6, g=(0.0, 0.0), fluid_height=ny * DX,
-                      c0=10.0)
-    lo, hi = (0.0, -nw * DX), (nx * DX, 2 * ny * DX)
-    pipe = build_pipeline(Selection(**models, periodic_x=True), ctx, domain_lo=lo,
-                          domain_hi=hi)
-    X, Y = np.meshgrid((np.arange(nx) + 0.5) * DX, (np.arange(-nw, ny) + 0.5) * DX)
-    x, y = X.ravel(), Y.ravel()
-    kind = np.where(y > 0, FLUID, WALL)
-    st = ParticleState(x, y, np.where(kind == FLUID, u0, 0.0), np.zeros(x.size),
-                       np.full(x.size, RHO0), np.full(x.size, RHO0 * DX * DX), kind)
-    sim = Simulation(st, pipe, registry.build("integrator", {"type": "verlet"}), h=H,
-                     support=models["kernel"].support, domain_lo=lo, domain_hi=hi, beta=0.2,
-                     force_condition=True, adjust_time_step=True, delta_t=1e-4)
-    fluid = st.kind == FLUID
-    p0 = np.sum(st.m[fluid] * st.u[fluid])
-    for _ in range(300):
-        sim.step()
-    s = sim.state
-    kept = np.sum(s.m[s.kind == FLUID] * s.u[s.kind == FLUID]) / p0
+    kept, s, x, y = sliding_layer({"type": "stationaryGhosts", "noSlip": no_slip})
     if no_slip:
         assert 0.93 < kept < 0.98
     else:

@@ -8,6 +8,8 @@ import re
 import numpy as np
 import pytest
 
+from conftest import sliding_layer
+
 from sphfoam.case.case import Case
 from sphfoam.case.times import list_times
 from sphfoam.engine.state import FLUID, WALL
@@ -359,44 +361,11 @@ def test_free_slip_mdbc_keeps_a_sliding_layers_momentum(no_slip):
     the wall particles take the fluid's tangential velocity at their nodes: the tangential
     difference is gone from every pair and the momentum is kept to 1e-5; the walls stay put
     (the integrator moves them with the prescribed velocity, zero)."""
-    from sphfoam import registry
-    from sphfoam.engine.build import build_pipeline
-    from sphfoam.engine.plan import Selection
-    from sphfoam.engine.simulation import Simulation
-    from sphfoam.engine.state import ParticleState
-    from sphfoam.models.base import CaseContext
+    def ghosts(x, y, wall):                 # the floor y = 0: the node at -y across it
+        return {"ghostX": np.zeros(x.size), "ghostY": np.where(wall, -2.0 * y, 0.0),
+                "corner": np.zeros(x.size)}
 
-    dx, hdx, nx, ny, nw, u0 = 0.01, 1.3, 20, 10, 3, 0.5
-    h = hdx * dx
-    specs = dict(kernel={"type": "wendlandC2"},
-                 equationOfState={"type": "tait", "speedOfSound": 10.0},
-                 continuity={"type": "densityWeighted"}, momentum={"type": "colagrossiLandrini"},
-                 viscosity={"type": "artificial", "alpha": 0.1},
-                 boundary={"type": "mDBC", "noSlip": no_slip})
-    models = {f: registry.build(f, sp) for f, sp in specs.items()}
-    ctx = CaseContext(dx=dx, h=h, rho0=RHO0, nu=1e-6, g=(0.0, 0.0), fluid_height=ny * dx,
-                      c0=10.0)
-    lo, hi = (0.0, -nw * dx), (nx * dx, 2 * ny * dx)
-    pipe = build_pipeline(Selection(**models, periodic_x=True), ctx, domain_lo=lo,
-                          domain_hi=hi)
-    X, Y = np.meshgrid((np.arange(nx) + 0.5) * dx, (np.arange(-nw, ny) + 0.5) * dx)
-    x, y = X.ravel(), Y.ravel()
-    kind = np.where(y > 0, FLUID, WALL)
-    wall = kind == WALL
-    extra = {"ghostX": np.zeros(x.size), "ghostY": np.where(wall, -2.0 * y, 0.0),
-             "corner": np.zeros(x.size)}
-    st = ParticleState(x, y, np.where(kind == FLUID, u0, 0.0), np.zeros(x.size),
-                       np.full(x.size, RHO0), np.full(x.size, RHO0 * dx * dx), kind,
-                       extra=extra)
-    sim = Simulation(st, pipe, registry.build("integrator", {"type": "verlet"}), h=h,
-                     support=models["kernel"].support, domain_lo=lo, domain_hi=hi, beta=0.2,
-                     force_condition=True, adjust_time_step=True, delta_t=1e-4)
-    fluid = st.kind == FLUID
-    p0 = np.sum(st.m[fluid] * st.u[fluid])
-    for _ in range(300):
-        sim.step()
-    s = sim.state
-    kept = np.sum(s.m[s.kind == FLUID] * s.u[s.kind == FLUID]) / p0
+    kept, s, x, y = sliding_layer({"type": "mDBC", "noSlip": no_slip}, ghosts)
     if no_slip:
         assert 0.93 < kept < 0.98
     else:

@@ -482,6 +482,7 @@ class ModifiedDynamic(Boundary):
                        np.ascontiguousarray(oz[walls]) if three else ox[:0], starts, idx,
                        corner, work)
         self._sum = None
+        self._uw = self._U0 = None          # indexed by the old order: made again before use
 
     def before_evaluation(self, run):
         """The wall particles' density, pressure and sound speed from their ghost nodes
@@ -515,8 +516,8 @@ class ModifiedDynamic(Boundary):
         self._U0, self._uw = U0, uw
         self._sum = now
 
-    # the free-slip form's hooks (None with no slip): the nodes' tangential velocities are the
-    # wall particles' for the pair passes only; the prescribed ones are put back after them,
+    # the free-slip form's hooks (None with no slip): the velocities made from the nodes are
+    # the wall particles' for the pair passes only; the prescribed ones are put back after them,
     # before the integrator moves the walls and before anything is written or sampled
     def _set_velocity(self, run, which):
         if self._lists is not None and which is not None:
