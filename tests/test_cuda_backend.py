@@ -137,12 +137,35 @@ HOOK_CASES = [
         "system/particleDict:walls.flume.max": [3, 1.2]}, marks=_SLOW),
     # Adami's free slip in 3-D: the box and block faces' normals (the tank, the box)
     pytest.param("damBreak3D", 0.2, 3, {
-        "constant/sphProperties:boundary": {"type": "adami", "noSlip": "no"}}, marks=_SLOW)]
+        "constant/sphProperties:boundary": {"type": "adami", "noSlip": "no"}}, marks=_SLOW),
+    # mDBC (its device form, sphfoam.models.mdbc_cuda), 20-40 s each: free slip with the
+    # list built at every step (cellSizeFactor 1: no skin), so the ghost nodes' lists are
+    # made again after each sort (218 particles); no slip; free slip in 3-D with the box in
+    # the tank (its edges' and corners' nodes), 1 598 particles, 100 s
+    ("damBreakMatched", 0.2, 3, {
+        "constant/sphProperties:boundary": {"type": "mDBC", "noSlip": "no"},
+        "system/sphSchemes:neighbourSearch.cellSizeFactor": 1.0}),
+    pytest.param("damBreakMatched", 0.2, 3, {
+        "constant/sphProperties:boundary": {"type": "mDBC"}}, marks=_SLOW),
+    pytest.param("damBreak3D", 0.2, 3, {
+        "constant/sphProperties:boundary": {"type": "mDBC", "noSlip": "no"}}, marks=_SLOW)]
 
 
 @pytest.mark.parametrize("case, dx, steps, edits", CASES + HOOK_CASES)
 def test_cuda_matches_cpu_under_the_simulator(case, dx, steps, edits):
     _assert_matches(_compare(case, dx, steps, edits), 3 if case.endswith("3D") else 2)
+
+
+def test_forces_on_free_slip_mdbc_walls_on_the_device_as_on_the_cpu():
+    """``forces`` on a free-slip mDBC bed after a step (tests/cuda_forces_mdbc.py, 15 s):
+    through the device form's ``before_passes`` and ``after_rates`` it reads the walls'
+    velocities as the device's passes see them, the same row as the CPU's (the viscous
+    part along the motion about a tenth of the no-slip bed's 1 N/m), and the walls are still
+    again in the device's state afterwards."""
+    res = _simulated("cuda_forces_mdbc.py")
+    assert res["walls_still_cpu"] and res["walls_still_cuda"], res
+    assert res["rel"] < RTOL, res
+    assert abs(res["viscous_x"][1]) < 0.2, res
 
 
 #: solitaryBeach (mirrorGhosts, pressure hydrostatic, wallLaw smooth, the moving paddle) at

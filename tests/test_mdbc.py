@@ -341,15 +341,24 @@ def test_mdbc_walls_hold_the_dam_break_under_each_integrator(tutorial, integrato
     assert y.min() > 0.0 and x.min() > 0.0
 
 
-def test_backend_cuda_refuses_mdbc_by_name(tutorial):
-    """mDBC's hooks have no device form: backend cuda names the model and its hooks."""
+@pytest.mark.parametrize("no_slip", ["yes", "no"])
+def test_backend_cuda_serves_mdbc_in_both_dimensions(tutorial, no_slip):
+    """mDBC's device form (sphfoam.models.mdbc_cuda) stands for every hook the model
+    implements, with and without slip, in 2-D and 3-D: backend cuda refuses nothing (the
+    fields against the CPU: tests/test_cuda_backend.py)."""
     from sphfoam.assemble import selection
     from sphfoam.engine.cuda.build import refusals
+    from sphfoam.engine.cuda.forms import covered_hooks
 
-    sel = selection(Case(tutorial("damBreak", {
-        "constant/sphProperties:boundary": {"type": "mDBC"}})))
-    assert refusals(sel) == ["boundary 'mDBC': its run-time hooks (attach, after_sort, "
-                             "before_evaluation) run on host arrays (no device form)"]
+    for name in ("damBreak", "damBreak3D"):
+        sel = selection(Case(tutorial(name, {
+            "constant/sphProperties:boundary": {"type": "mDBC", "noSlip": no_slip}})))
+        assert refusals(sel) == []
+        bnd = sel.boundary
+        hooks = {h for h in covered_hooks(bnd) if bnd.implements(h)}
+        slip = {"before_passes", "after_rates", "after_density_rate"}
+        assert hooks == {"attach", "after_sort", "before_evaluation"} | (
+            slip if no_slip == "no" else set())
 
 
 @pytest.mark.parametrize("no_slip", [True, False], ids=["noSlip", "freeSlip"])

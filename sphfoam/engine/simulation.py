@@ -197,6 +197,12 @@ class Simulation:
         """What the selected models report at the end of a run ("" for nothing)."""
         return "; ".join(x for x in (f() for f in self._summaries) if x)
 
+    def model_hook(self, model, name: str) -> None:
+        """The run-time hook ``name`` of the selected ``model`` alone, now: for a function
+        object that reads the state as the pair passes see it (``forces`` over walls whose
+        velocity the passes see differently: ``before_passes``, then ``after_rates``)."""
+        getattr(model, name)(self.context)
+
     # --- walls ---------------------------------------------------------------------------
     def move_walls(self, t: float):
         """Put every wall with a prescribed motion where it is at time ``t`` (particles and

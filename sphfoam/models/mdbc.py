@@ -60,8 +60,8 @@ The ghost nodes' neighbours are gathered at each build of the neighbour list, ov
 grid the list uses, within a cell side (the support and the list's skin) of each node, for
 the wall particles that can meet the fluid (less deep behind the wall than the support
 radius less dx/4); before each evaluation the fit runs over those lists, in compiled
-parallel loops. The run-time hooks have no device form: backend cuda refuses ``mDBC`` by
-name. Measured (cost, the 3-D dam break): docs/user-guide.md and
+parallel loops (:func:`node_list` and :func:`fit_wall` per wall particle, which the device
+form, ``sphfoam.models.mdbc_cuda``, runs as device functions on backend cuda). Measured (cost, the 3-D dam break): docs/user-guide.md and
 benchmarks/results/damBreak3D-2026-12-05/README.md.
 """
 
@@ -104,44 +104,53 @@ def _cell_range(c, n, periodic):
     return lo, hi - lo + 1
 
 
+@njit(**_JIT)
+def node_list(px, py, pz, three, x, y, kind, z, cell_start, x0, y0, z0, inv_cell, ncx, ncy,
+              ncz, lx, ly, lz, reach2, fill, out_idx, start):
+    """The fluid particles within sqrt(reach2) of the node (px, py, pz), over the 3 (x 3) x 3
+    cells about it in the order of the cell walk: how many, and with ``fill`` their indices
+    into ``out_idx`` from ``start`` (2-D: ``three`` False, z and pz unread, ncz 1)."""
+    cx = int(math.floor((px - x0) * inv_cell))
+    cy = int(math.floor((py - y0) * inv_cell))
+    cz = int(math.floor((pz - z0) * inv_cell)) if three else 0
+    ix0, nx_ = _cell_range(cx, ncx, lx > 0.0)
+    iy0, ny_ = _cell_range(cy, ncy, ly > 0.0)
+    iz0, nz_ = _cell_range(cz, ncz, lz > 0.0) if three else (0, 1)
+    n = 0
+    for kz in range(iz0, iz0 + nz_):
+        jz = kz % ncz
+        for ky in range(iy0, iy0 + ny_):
+            jy = ky % ncy
+            for kx in range(ix0, ix0 + nx_):
+                c = (jz * ncy + jy) * ncx + kx % ncx
+                for b in range(cell_start[c], cell_start[c + 1]):
+                    if kind[b] != FLUID:
+                        continue
+                    dx_ = _wrap(x[b] - px, lx)
+                    dy_ = _wrap(y[b] - py, ly)
+                    r2 = dx_ * dx_ + dy_ * dy_
+                    if three:
+                        dz_ = _wrap(z[b] - pz, lz)
+                        r2 += dz_ * dz_
+                    if r2 < reach2:
+                        if fill:
+                            out_idx[start + n] = b
+                        n += 1
+    return n
+
+
 @njit(parallel=True, **_JIT)
 def ghost_lists(walls, gx, gy, gz, x, y, z, kind, cell_start, x0, y0, z0, inv_cell, ncx,
                 ncy, ncz, lx, ly, lz, reach2, counts, fill, out_idx):
     """Two passes over the wall particles ``walls`` (indices): ``fill`` False counts into
     ``counts[k]`` the fluid particles within sqrt(reach2) of wall k's ghost node (gx, gy, gz:
     the nodes' positions); ``fill`` True writes them into ``out_idx`` from ``counts[k]`` (the
-    running sum's start). 2-D: z and gz empty and ncz 1."""
+    running sum's start). 2-D: z and gz empty and ncz 1 (:func:`node_list`)."""
     three = z.shape[0] > 0
     for k in prange(walls.shape[0]):
-        px, py = gx[k], gy[k]
         pz = gz[k] if three else 0.0
-        cx = int(math.floor((px - x0) * inv_cell))
-        cy = int(math.floor((py - y0) * inv_cell))
-        cz = int(math.floor((pz - z0) * inv_cell)) if three else 0
-        ix0, nx_ = _cell_range(cx, ncx, lx > 0.0)
-        iy0, ny_ = _cell_range(cy, ncy, ly > 0.0)
-        iz0, nz_ = _cell_range(cz, ncz, lz > 0.0) if three else (0, 1)
-        n = 0
-        start = counts[k]
-        for kz in range(iz0, iz0 + nz_):
-            jz = kz % ncz
-            for ky in range(iy0, iy0 + ny_):
-                jy = ky % ncy
-                for kx in range(ix0, ix0 + nx_):
-                    c = (jz * ncy + jy) * ncx + kx % ncx
-                    for b in range(cell_start[c], cell_start[c + 1]):
-                        if kind[b] != FLUID:
-                            continue
-                        dx_ = _wrap(x[b] - px, lx)
-                        dy_ = _wrap(y[b] - py, ly)
-                        r2 = dx_ * dx_ + dy_ * dy_
-                        if three:
-                            dz_ = _wrap(z[b] - pz, lz)
-                            r2 += dz_ * dz_
-                        if r2 < reach2:
-                            if fill:
-                                out_idx[start + n] = b
-                            n += 1
+        n = node_list(gx[k], gy[k], pz, three, x, y, kind, z, cell_start, x0, y0, z0,
+                      inv_cell, ncx, ncy, ncz, lx, ly, lz, reach2, fill, out_idx, counts[k])
         if not fill:
             counts[k] = n
 
@@ -193,161 +202,180 @@ def _normal(ug, U, g, tiny):
     return U
 
 
-@njit(parallel=True, **_JIT)
-def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, lz, h,
-                 support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work, slip, u,
-                 v, w, corner, U0, out_u):
-    """English et al. (2022) eq. (10) for each wall particle ``walls[k]``: the linear fit of
-    the fluid's density at its ghost node (offset ox, oy, oz from it) over the node's list
-    ``idx[starts[k]:starts[k + 1]]``, extrapolated to the particle; where the fit is
-    ill-conditioned, the node's zeroth order with the hydrostatic continuation to the particle
-    (AHA12 eq. (27) with the node's weights); its p and c by Tait's equation. ``work``
-    (len(walls), 4, 8) is scratch.
+@njit(**_JIT)
+def fit_wall(a, gox, goy, goz, lo, hi, idx, three, x, y, z, m, rho, lx, ly, lz, h, support,
+             kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, wk, slip, u, v, w, corner,
+             U0x, U0y, U0z):
+    """English et al. (2022) eq. (10) for the wall particle ``a``: the linear fit of the
+    fluid's density at its ghost node (offset gox, goy, goz from it) over the node's list
+    ``idx[lo:hi]``, extrapolated to the particle; where the fit is ill-conditioned, the
+    node's zeroth order with the hydrostatic continuation to the particle (AHA12 eq. (27)
+    with the node's weights); its p and c by Tait's equation: (rho, p, c, u_w). ``wk``
+    (4 x 8) is scratch.
 
-    ``slip`` (free slip; otherwise u, v, w, corner, U0 and out_u may be empty): also the
-    fluid's velocity u_g at the node, from the same fit (the Shepard mean where it is
-    ill-conditioned, the prescribed U0 where no fluid is near); into ``out_u`` (dim,
-    len(walls)) its tangential part, and its normal part about the wall's mirrored where the
-    water approaches the wall and the wall's where it leaves: u_w = u_g - c ((u_g - U0) . n)
-    n, n = the unit offset to the node, c = 2 for (u_g - U0) . n < 0, else 1; behind an edge
-    or a corner (``corner`` > 0), where the node is the image across two or three planes,
-    each component along which the offset runs likewise (``_normal``)."""
-    three = z.shape[0] > 0
+    ``slip`` (free slip; otherwise u, v, w are not read): also the fluid's velocity u_g at
+    the node, from the same fit (the Shepard mean where it is ill-conditioned, the
+    prescribed (U0x, U0y, U0z) where no fluid is near), and u_w its tangential part with its
+    normal part about the wall's mirrored where the water approaches the wall and the wall's
+    where it leaves: u_w = u_g - c ((u_g - U0) . n) n, n = the unit offset to the node, c = 2
+    for (u_g - U0) . n < 0, else 1; behind an edge or a corner (``corner`` > 0), where the
+    node is the image across two or three planes, each component along which the offset runs
+    likewise (``_normal``). One wall particle's arithmetic, for the CPU's loop
+    (:func:`wall_density`) and the device's (``sphfoam.models.mdbc_cuda``)."""
     mm = 4 if three else 3
     nv = (3 if three else 2) if slip else 0
     inv_h = 1.0 / h
     q2max = support * support
-    for k in prange(walls.shape[0]):
-        a = walls[k]
-        px = x[a] + ox[k]
-        py = y[a] + oy[k]
-        pz = z[a] + oz[k] if three else 0.0
-        s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
-        b0 = b1 = b2 = b3 = 0.0             # rho
-        u0 = u1 = u2 = u3 = 0.0             # free slip: u, v, w
-        v0 = v1 = v2 = v3 = 0.0
-        w0 = w1 = w2 = w3 = 0.0
-        for n in range(starts[k], starts[k + 1]):
+    px = x[a] + gox
+    py = y[a] + goy
+    pz = z[a] + goz if three else 0.0
+    s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
+    b0 = b1 = b2 = b3 = 0.0             # rho
+    u0 = u1 = u2 = u3 = 0.0             # free slip: u, v, w
+    v0 = v1 = v2 = v3 = 0.0
+    w0 = w1 = w2 = w3 = 0.0
+    for n in range(lo, hi):
+        b = idx[n]
+        rx = _wrap(x[b] - px, lx) * inv_h
+        ry = _wrap(y[b] - py, ly) * inv_h
+        rz = _wrap(z[b] - pz, lz) * inv_h if three else 0.0
+        q2 = rx * rx + ry * ry + rz * rz
+        if q2 >= q2max:
+            continue
+        vw = m[b] / rho[b] * kernel_f(math.sqrt(q2))
+        vr = vw * rho[b]
+        s00 += vw
+        s01 += vw * rx
+        s02 += vw * ry
+        s03 += vw * rz
+        s11 += vw * rx * rx
+        s12 += vw * rx * ry
+        s13 += vw * rx * rz
+        s22 += vw * ry * ry
+        s23 += vw * ry * rz
+        s33 += vw * rz * rz
+        b0 += vr
+        b1 += vr * rx
+        b2 += vr * ry
+        b3 += vr * rz
+        if slip:
+            vu = vw * u[b]
+            vv = vw * v[b]
+            u0 += vu
+            u1 += vu * rx
+            u2 += vu * ry
+            u3 += vu * rz
+            v0 += vv
+            v1 += vv * rx
+            v2 += vv * ry
+            v3 += vv * rz
+            if three:
+                vz = vw * w[b]
+                w0 += vz
+                w1 += vz * rx
+                w2 += vz * ry
+                w3 += vz * rz
+    wk[0, 0], wk[0, 1], wk[0, 2], wk[1, 1], wk[1, 2], wk[2, 2] = s00, s01, s02, s11, s12, s22
+    wk[0, mm], wk[1, mm], wk[2, mm] = b0, b1, b2
+    if three:
+        wk[0, 3], wk[1, 3], wk[2, 3], wk[3, 3], wk[3, mm] = s03, s13, s23, s33, b3
+    if slip:
+        wk[0, mm + 1], wk[1, mm + 1], wk[2, mm + 1] = u0, u1, u2
+        wk[0, mm + 2], wk[1, mm + 2], wk[2, mm + 2] = v0, v1, v2
+        if three:
+            wk[3, mm + 1], wk[3, mm + 2] = u3, v3
+            wk[0, mm + 3], wk[1, mm + 3], wk[2, mm + 3], wk[3, mm + 3] = w0, w1, w2, w3
+    s = wk[0, 0]
+    # the zeroth order (Shepard) of the velocity at the node, before the solve
+    ug0 = wk[0, mm + 1] / s if slip and s > 0.0 else 0.0
+    ug1 = wk[0, mm + 2] / s if slip and s > 0.0 else 0.0
+    ug2 = wk[0, mm + 3] / s if slip and three and s > 0.0 else 0.0
+    fit = False
+    if s > 0.0:
+        for i in range(mm):
+            for j in range(i):
+                wk[i, j] = wk[j, i]
+        # the determinant of the moment matrix normalised by the kernel sum
+        fit = _solve(wk, mm, 1 + nv) / s ** mm >= det_min
+    if fit:
+        r = wk[0, mm] - (gox * wk[1, mm] + goy * wk[2, mm]
+                         + (goz * wk[3, mm] if three else 0.0)) * inv_h
+        if slip:
+            ug0 = wk[0, mm + 1]
+            ug1 = wk[0, mm + 2]
+            ug2 = wk[0, mm + 3] if three else 0.0
+    elif s > 0.0:
+        # the fluid's pressure continued hydrostatically to the particle, weighted at the
+        # node: p_w = sum_f (p_f + rho_f g . (x_w - x_f)) V_f W / sum_f V_f W
+        sp = 0.0
+        for n in range(lo, hi):
             b = idx[n]
-            rx = _wrap(x[b] - px, lx) * inv_h
-            ry = _wrap(y[b] - py, ly) * inv_h
-            rz = _wrap(z[b] - pz, lz) * inv_h if three else 0.0
-            q2 = rx * rx + ry * ry + rz * rz
+            rx = _wrap(x[b] - px, lx)
+            ry = _wrap(y[b] - py, ly)
+            rz = _wrap(z[b] - pz, lz) if three else 0.0
+            q2 = (rx * rx + ry * ry + rz * rz) * inv_h * inv_h
             if q2 >= q2max:
                 continue
             vw = m[b] / rho[b] * kernel_f(math.sqrt(q2))
-            vr = vw * rho[b]
-            s00 += vw
-            s01 += vw * rx
-            s02 += vw * ry
-            s03 += vw * rz
-            s11 += vw * rx * rx
-            s12 += vw * rx * ry
-            s13 += vw * rx * rz
-            s22 += vw * ry * ry
-            s23 += vw * ry * rz
-            s33 += vw * rz * rz
-            b0 += vr
-            b1 += vr * rx
-            b2 += vr * ry
-            b3 += vr * rz
-            if slip:
-                vu = vw * u[b]
-                vv = vw * v[b]
-                u0 += vu
-                u1 += vu * rx
-                u2 += vu * ry
-                u3 += vu * rz
-                v0 += vv
-                v1 += vv * rx
-                v2 += vv * ry
-                v3 += vv * rz
-                if three:
-                    vz = vw * w[b]
-                    w0 += vz
-                    w1 += vz * rx
-                    w2 += vz * ry
-                    w3 += vz * rz
-        wk = work[k]
-        wk[0, 0], wk[0, 1], wk[0, 2], wk[1, 1], wk[1, 2], wk[2, 2] = s00, s01, s02, s11, s12, s22
-        wk[0, mm], wk[1, mm], wk[2, mm] = b0, b1, b2
-        if three:
-            wk[0, 3], wk[1, 3], wk[2, 3], wk[3, 3], wk[3, mm] = s03, s13, s23, s33, b3
+            pb = B * ((rho[b] / rho0) ** gamma - 1.0)
+            # x_w - x_f = -(offset + r)
+            sp += vw * (pb - rho[b] * (gx * (gox + rx) + gy * (goy + ry)
+                                       + gz * (goz + rz)))
+        r = rho0 * max(1.0 + sp / s / B, 1e-6) ** (1.0 / gamma)
+    else:
+        r = rho0
+    # never below rho0: a wall that pulled would absorb the water (DualSPHysics' rule for
+    # its boundary particles)
+    r = max(r, rho0)
+    ratio = r / rho0
+    pw = B * (ratio ** gamma - 1.0)
+    cw = c0 * ratio ** (0.5 * (gamma - 1.0))
+    if not slip:
+        return r, pw, cw, 0.0, 0.0, 0.0
+    if s <= 0.0:
+        ug0, ug1, ug2 = U0x, U0y, U0z
+    if corner > 0.5:
+        tiny = 1e-9 * math.sqrt(gox * gox + goy * goy + goz * goz)
+        return (r, pw, cw, _normal(ug0, U0x, gox, tiny), _normal(ug1, U0y, goy, tiny),
+                _normal(ug2, U0z, goz, tiny) if three else 0.0)
+    inv = 1.0 / math.sqrt(gox * gox + goy * goy + goz * goz)
+    nx, ny, nz = gox * inv, goy * inv, goz * inv
+    dn = (ug0 - U0x) * nx + (ug1 - U0y) * ny + (ug2 - U0z) * nz
+    if dn < 0.0:
+        dn *= 2.0
+    return r, pw, cw, ug0 - dn * nx, ug1 - dn * ny, (ug2 - dn * nz) if three else 0.0
+
+
+@njit(parallel=True, **_JIT)
+def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, lz, h,
+                 support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work, slip, u,
+                 v, w, corner, U0, out_u):
+    """:func:`fit_wall` for each wall particle ``walls[k]``, over its node's list
+    ``idx[starts[k]:starts[k + 1]]``, with the scratch ``work[k]`` (len(walls), 4, 8): its
+    rho, p and c set, and with ``slip`` its pair passes' velocity into ``out_u`` (dim,
+    len(walls); U0 the prescribed, (dim, len(walls))). 2-D: z and oz empty; no slip: u, v,
+    w, corner, U0 and out_u may be empty."""
+    three = z.shape[0] > 0
+    for k in prange(walls.shape[0]):
+        a = walls[k]
+        goz = oz[k] if three else 0.0
+        cor = U0x = U0y = U0z = 0.0
         if slip:
-            wk[0, mm + 1], wk[1, mm + 1], wk[2, mm + 1] = u0, u1, u2
-            wk[0, mm + 2], wk[1, mm + 2], wk[2, mm + 2] = v0, v1, v2
+            cor, U0x, U0y = corner[k], U0[0, k], U0[1, k]
             if three:
-                wk[3, mm + 1], wk[3, mm + 2] = u3, v3
-                wk[0, mm + 3], wk[1, mm + 3], wk[2, mm + 3], wk[3, mm + 3] = w0, w1, w2, w3
-        s = wk[0, 0]
-        # the zeroth order (Shepard) of the velocity at the node, before the solve
-        ug0 = wk[0, mm + 1] / s if slip and s > 0.0 else 0.0
-        ug1 = wk[0, mm + 2] / s if slip and s > 0.0 else 0.0
-        ug2 = wk[0, mm + 3] / s if slip and three and s > 0.0 else 0.0
-        fit = False
-        if s > 0.0:
-            for i in range(mm):
-                for j in range(i):
-                    wk[i, j] = wk[j, i]
-            # the determinant of the moment matrix normalised by the kernel sum
-            fit = _solve(wk, mm, 1 + nv) / s ** mm >= det_min
-        if fit:
-            r = wk[0, mm] - (ox[k] * wk[1, mm] + oy[k] * wk[2, mm]
-                             + (oz[k] * wk[3, mm] if three else 0.0)) * inv_h
-            if slip:
-                ug0 = wk[0, mm + 1]
-                ug1 = wk[0, mm + 2]
-                ug2 = wk[0, mm + 3] if three else 0.0
-        elif s > 0.0:
-            # the fluid's pressure continued hydrostatically to the particle, weighted at the
-            # node: p_w = sum_f (p_f + rho_f g . (x_w - x_f)) V_f W / sum_f V_f W
-            sp = 0.0
-            for n in range(starts[k], starts[k + 1]):
-                b = idx[n]
-                rx = _wrap(x[b] - px, lx)
-                ry = _wrap(y[b] - py, ly)
-                rz = _wrap(z[b] - pz, lz) if three else 0.0
-                q2 = (rx * rx + ry * ry + rz * rz) * inv_h * inv_h
-                if q2 >= q2max:
-                    continue
-                vw = m[b] / rho[b] * kernel_f(math.sqrt(q2))
-                pb = B * ((rho[b] / rho0) ** gamma - 1.0)
-                # x_w - x_f = -(offset + r)
-                sp += vw * (pb - rho[b] * (gx * (ox[k] + rx) + gy * (oy[k] + ry)
-                                           + gz * ((oz[k] if three else 0.0) + rz)))
-            r = rho0 * max(1.0 + sp / s / B, 1e-6) ** (1.0 / gamma)
-        else:
-            r = rho0
-        # never below rho0: a wall that pulled would absorb the water (DualSPHysics' rule for
-        # its boundary particles)
-        r = max(r, rho0)
+                U0z = U0[2, k]
+        r, pw, cw, ux, uy, uz = fit_wall(
+            a, ox[k], oy[k], goz, starts[k], starts[k + 1], idx, three, x, y, z, m, rho, lx,
+            ly, lz, h, support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work[k],
+            slip, u, v, w, cor, U0x, U0y, U0z)
         rho[a] = r
-        ratio = r / rho0
-        p[a] = B * (ratio ** gamma - 1.0)
-        c[a] = c0 * ratio ** (0.5 * (gamma - 1.0))
+        p[a] = pw
+        c[a] = cw
         if slip:
-            U0x, U0y = U0[0, k], U0[1, k]
-            U0z = U0[2, k] if three else 0.0
-            if s <= 0.0:
-                ug0, ug1, ug2 = U0x, U0y, U0z
-            gox, goy = ox[k], oy[k]
-            goz = oz[k] if three else 0.0
-            if corner[k] > 0.5:
-                tiny = 1e-9 * math.sqrt(gox * gox + goy * goy + goz * goz)
-                out_u[0, k] = _normal(ug0, U0x, gox, tiny)
-                out_u[1, k] = _normal(ug1, U0y, goy, tiny)
-                if three:
-                    out_u[2, k] = _normal(ug2, U0z, goz, tiny)
-            else:
-                inv = 1.0 / math.sqrt(gox * gox + goy * goy + goz * goz)
-                nx, ny, nz = gox * inv, goy * inv, goz * inv
-                dn = (ug0 - U0x) * nx + (ug1 - U0y) * ny + (ug2 - U0z) * nz
-                if dn < 0.0:
-                    dn *= 2.0
-                out_u[0, k] = ug0 - dn * nx
-                out_u[1, k] = ug1 - dn * ny
-                if three:
-                    out_u[2, k] = ug2 - dn * nz
+            out_u[0, k] = ux
+            out_u[1, k] = uy
+            if three:
+                out_u[2, k] = uz
 
 
 @njit(parallel=True, **_JIT)
@@ -400,6 +428,10 @@ class ModifiedDynamic(Boundary):
            "approach)")
     #: the hooks handle z in 3-D
     hook_dims = (2, 3)
+    #: the hooks on the device (sphfoam.models.mdbc_cuda), in both dimensions
+    device_form = "sphfoam.models.mdbc_cuda:ModifiedDynamicDevice"
+    device_hooks = ("attach", "after_sort", "before_evaluation", "before_passes",
+                    "after_rates", "after_density_rate")
 
     class Coeffs(Coeffs):
         noSlip: bool = Field(True, description=(

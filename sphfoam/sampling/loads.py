@@ -401,12 +401,11 @@ class Forces(FunctionObject):
     def execute(self, sim):
         _current_pressure(sim)
         bnd = self.case.models.sph["boundary"]
-        run = getattr(sim, "context", None)
-        if run is not None and bnd.implements("before_passes"):
+        if hasattr(sim, "model_hook") and bnd.implements("before_passes"):
             # the wall velocities the pair passes see (mDBC with free slip), put back after
-            bnd.before_passes(run)
+            sim.model_hook(bnd, "before_passes")
             r = self.measure(sim.state)
-            bnd.after_rates(run)
+            sim.model_hook(bnd, "after_rates")
         else:
             r = self.measure(sim.state)
         for fh, p, v in ((self._fh, r[0], r[1]), (self._mh, r[2], r[3])):

@@ -33,6 +33,17 @@ class DeviceContext(RunContext):
         """How many particles (and ghosts) the arrays hold."""
         return self._sim.n
 
+    @property
+    def cell_start(self):
+        """The first particle of each cell (device array, ``cells.ncells + 1``) of the sort
+        just made: valid from ``after_sort`` to the next build."""
+        return self._sim.cell_start
+
+    def field(self, name: str):
+        """The device array of the per-particle field ``name`` (a set-up field such as
+        ``ghostX``), wherever the runtime keeps it."""
+        return self._sim._extra(name)
+
     def launch(self, kernel, n: int, *args) -> None:
         """``kernel`` over ``n`` threads (one per particle)."""
         self._sim._launch(kernel, n, *args)

@@ -19,6 +19,8 @@ form per selected model that has one (``cls(model)``) and calls its methods with
                                        binned outside)
 ``keeps_neighbours(run)``              whether what it added at the build still serves
 ``before_evaluation(run)``             before every equation of state, rates or density pass
+``before_passes(run)``                 after it, before the pair passes of the rates and the
+                                       density pass (not the equation of state's)
 ``after_rates(run)``                   after every evaluation of the rates
 ``walls_moved(run, offsets, velocities)``  prescribed wall motion at a stage time
 ``after_step(run)``                    at the end of each step

@@ -311,6 +311,18 @@ class CudaSimulation:
         self.hooks.before_evaluation()
         self._forms("before_evaluation")
 
+    def model_hook(self, model, name: str) -> None:
+        """The run-time hook ``name`` of the selected ``model`` alone, now, by its device form
+        (as :meth:`sphfoam.engine.simulation.Simulation.model_hook`); the host's copy of the
+        state is then stale."""
+        for form in self.forms:
+            if getattr(form, "model", None) is model:
+                fn = getattr(form, name, None)
+                if fn is not None:
+                    fn(self.context)
+                    self._dirty = True
+                return
+
     def _forms(self, name: str, *args):
         """Call ``name`` of every device form that has it."""
         for form in self.forms:
@@ -445,8 +457,8 @@ class CudaSimulation:
             self.d_fld = out
         if kept < n:
             self._remove(kept)
-        self._forms("after_sort", order)
         self.cell_start = start[:ncells + 1]
+        self._forms("after_sort", order)
         n = self.n
         count = cu.device_array(n, dtype=np.int64)
         grid = (*(d[k] for k in self._f8), d["kind"], bool(self.module.FLUID_PAIRS_ONLY),
@@ -527,6 +539,7 @@ class CudaSimulation:
 
     def rates(self):
         self._before_evaluation()
+        self._forms("before_passes")
         args = self._args()
         self._prepass(args)
         sigma = True
@@ -542,6 +555,7 @@ class CudaSimulation:
 
     def density_rate(self):
         self._before_evaluation()
+        self._forms("before_passes")
         args = self._args()
         self._prepass(args, "density")
         self._timed("density", self._launch, self.module.density_rate, self.n, *args,
