@@ -51,6 +51,11 @@ CASES = [
     ("damBreak3D symplectic", "damBreak3D", 0.1, 200,
      {"system/sphSchemes:integrator": {"type": "symplectic"}}),
     ("solitaryWave3D", "solitaryWave3D", 0.05, 100, {}),
+    # mDBC's device form: free slip in 3-D (the box's edges and corners), no slip in 2-D
+    ("damBreak3D mDBC free slip", "damBreak3D", 0.1, 200,
+     {"constant/sphProperties:boundary": {"type": "mDBC", "noSlip": "no"}}),
+    ("damBreak mDBC", "damBreak", 0.02, 300, {"constant/sphProperties:boundary":
+                                              {"type": "mDBC"}}),
 ]
 
 
