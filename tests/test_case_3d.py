@@ -202,7 +202,7 @@ def test_3d_mirror_ghosts_of_a_particle_by_a_vertex_of_the_tank():
         for no_slip in (False, True):
             gx_, gy_, gz_, gu, gv, gw, grho = m3.ghost_state(
                 0.03, 0.02, 0.01, 1.0, 2.0, 3.0, 1001.0, pl, f1[j], f2[j], f3[j], no_slip,
-                True, 0.0, 0.0, -9.81, rho0, B, gamma)
+                True, 0.0, 0.0, -9.81, rho0, B, gamma, np.empty(3), np.empty(3), np.empty(3))
             assert np.allclose((gx_, gy_, gz_), want, rtol=0, atol=1e-15)
             vel = [(-c if (no_slip or k in axes) else c) for k, c in enumerate((1, 2, 3))]
             assert (gu, gv, gw) == tuple(float(c) for c in vel)

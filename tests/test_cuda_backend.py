@@ -204,6 +204,41 @@ def test_mirror_kernels_match_the_cpu_loops_under_the_simulator():
         assert res[k] < 1e-6, (k, res)
 
 
+def test_mirror3d_kernels_match_the_cpu_loops_under_the_simulator():
+    """Each 3-D kernel of the mirror ghosts' device form against the CPU's loop
+    (sphfoam.models.mirror3d) on made-up particles in the corner of a box tank whose three
+    faces move (tests/cuda_mirror3d_kernels.py, 8 s): the ghosts' count and table, their
+    state (free slip and no-slip, p_G = p_a and hydrostatic), their activity, the ghosts a
+    build would make, the dormant ones' fluid neighbours and the push-back; in double
+    precision and in single."""
+    res = _simulated("cuda_mirror3d_kernels.py")
+    assert "error" not in res, res
+    # every branch taken: edge and vertex ghosts, dormant ones near fluid, pushed back
+    assert min(res["ghosts"], res["edge_ghosts"], res["vertex_ghosts"], res["dormant"],
+               res["dormant_near_count"], res["pushed"]) > 0, res
+    for k in ("count", "table", "activity", "dormant_near", "push_back"):
+        assert res[k] == 0.0, (k, res)
+    assert res["state"] < RTOL, res
+    for k in ("state_single", "push_back_single"):
+        assert res[k] < 1e-6, (k, res)
+
+
+@pytest.mark.parametrize("case, dx, steps, edits", [
+    # the tank at rest, no slip and p_G hydrostatic: face, edge and vertex ghosts kept over
+    # the steps (64 particles, 636 ghosts, 30-50 s)
+    ("hydrostaticTank3D", 0.1, 3, {"constant/sphProperties:boundary": {
+        "type": "mirrorGhosts", "noSlip": "yes", "pressure": "hydrostatic"}}),
+    # the 3-D matched dam break, free slip, the list (and the ghosts) built at every step
+    # (500 particles, 1 359 ghosts, 140 s)
+    pytest.param("damBreakMatched3D", 0.1, 4, {
+        "constant/sphProperties:boundary": {"type": "mirrorGhosts"},
+        "system/sphSchemes:neighbourSearch.cellSizeFactor": 1.0}, marks=_SLOW)])
+def test_mirror_ghosts_in_3d_match_cpu_under_the_simulator(case, dx, steps, edits):
+    res = _compare(case, dx, steps, edits)
+    _assert_matches(res, 3)
+    assert res["ghosts"][0] == res["ghosts"][1] > 0, res
+
+
 def test_free_slip_mirror_ghosts_and_xsph_match_cpu_under_the_simulator(p_wall):
     """solitaryWallRunup with P's set-up: mirrorGhosts (free slip, p_G = p_a: T(3.77)-(3.80)
     as printed) and XSPH at dx = 5 m (104 particles, 136 ghosts), with a skin of 0.2 % of
@@ -295,9 +330,12 @@ def test_a_model_with_no_device_form_is_refused_by_name(tutorial, monkeypatch):
     sel = selection(Case(tutorial("damBreak", {
         "constant/sphProperties:boundary": {"type": "adami"}})))
     check_supported(sel)
-    # mirrored ghosts in 3-D: the device form mirrors across 2-D segments only
+    # mirrored ghosts in 3-D: the device form mirrors across box tanks' faces too; a device
+    # form written for fewer dimensions than its model is refused by name in the others
     sel3 = selection(Case(tutorial("hydrostaticTank3D", {
         "constant/sphProperties:boundary": {"type": "mirrorGhosts"}})))
+    check_supported(sel3)
+    monkeypatch.setattr(type(sel3.boundary), "device_dims", (2,))
     with pytest.raises(Unsupported, match=r"boundary 'mirrorGhosts': its device form has no "
                        r"3-D form"):
         check_supported(sel3)

@@ -284,8 +284,8 @@ class MirrorGhosts(Boundary):
     massless_ghosts = True
     hook_dims = (2, 3)
     device_form = "sphfoam.models.mirror_cuda:MirrorGhostsDevice"
-    #: the device form mirrors across 2-D segments only
-    device_dims = (2,)
+    #: the device form mirrors across 2-D segments and the faces of 3-D box tanks
+    device_dims = (2, 3)
     device_hooks = ("attach", "before_neighbours", "add_particles", "keeps_neighbours",
                     "after_sort", "before_evaluation", "after_rates", "walls_moved",
                     "after_step", "summary")

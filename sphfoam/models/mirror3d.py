@@ -83,10 +83,9 @@ def _distinct(pl, near, mask):
 
 
 @njit(**_JIT, inline="always")
-def ghosts_of(xa, ya, za, pl, reach, margin):
+def ghosts_of(xa, ya, za, pl, reach, margin, near):
     """How many ghosts particle a makes: one per non-empty set of its near faces whose axes
-    differ (a face: 1; an edge: 3; a vertex: 7)."""
-    near = np.empty(6, dtype=np.int64)
+    differ (a face: 1; an edge: 3; a vertex: 7). ``near``: scratch for 6 face indices."""
     m = _near_faces(xa, ya, za, pl, reach, margin, near)
     k = 0
     for mask in range(1, 1 << m):
@@ -100,8 +99,33 @@ def count_ghosts(x, y, z, kind, pl, reach, count, margin=0.0):
     for a in prange(x.shape[0]):
         k = 0
         if kind[a] == 0:
-            k = ghosts_of(x[a], y[a], z[a], pl, reach, margin)
+            k = ghosts_of(x[a], y[a], z[a], pl, reach, margin, np.empty(6, dtype=np.int64))
         count[a] = k
+
+
+@njit(**_JIT, inline="always")
+def fill_of(a, xa, ya, za, pl, reach, margin, j, src, f1, f2, f3, near):
+    """The ghosts of particle a into slots j on: its index and faces (``near``: scratch for
+    6 face indices)."""
+    m = _near_faces(xa, ya, za, pl, reach, margin, near)
+    for mask in range(1, 1 << m):
+        if not _distinct(pl, near, mask):
+            continue
+        src[j] = a
+        f1[j] = -1
+        f2[j] = -1
+        f3[j] = -1
+        n = 0
+        for i in range(m):
+            if mask & (1 << i):
+                if n == 0:
+                    f1[j] = near[i]
+                elif n == 1:
+                    f2[j] = near[i]
+                else:
+                    f3[j] = near[i]
+                n += 1
+        j += 1
 
 
 @njit(parallel=True, **_JIT)
@@ -110,27 +134,8 @@ def fill_ghosts(x, y, z, kind, pl, reach, offset, src, f1, f2, f3, margin=0.0):
     for a in prange(x.shape[0]):
         if kind[a] != 0:
             continue
-        near = np.empty(6, dtype=np.int64)
-        m = _near_faces(x[a], y[a], z[a], pl, reach, margin, near)
-        j = offset[a]
-        for mask in range(1, 1 << m):
-            if not _distinct(pl, near, mask):
-                continue
-            src[j] = a
-            f1[j] = -1
-            f2[j] = -1
-            f3[j] = -1
-            n = 0
-            for i in range(m):
-                if mask & (1 << i):
-                    if n == 0:
-                        f1[j] = near[i]
-                    elif n == 1:
-                        f2[j] = near[i]
-                    else:
-                        f3[j] = near[i]
-                    n += 1
-            j += 1
+        fill_of(a, x[a], y[a], z[a], pl, reach, margin, offset[a], src, f1, f2, f3,
+                np.empty(6, dtype=np.int64))
 
 
 @njit(**_JIT, inline="always")
@@ -145,18 +150,16 @@ def _reflect(p, vel, pl, f, no_slip):
 
 @njit(**_JIT, inline="always")
 def ghost_state(xa, ya, za, ua, va, wa, rhoa, pl, f1, f2, f3, no_slip, hydro, gx, gy, gz,
-                rho0, B, gamma):
+                rho0, B, gamma, p, vel, mean):
     """(x, y, z, u, v, w, rho) of the ghost of particle a across the faces f1 (f2, f3 >= 0):
     T(3.77)-(3.80). No-slip: u_G = 2 U - u_a with U the mean velocity of the ghost's faces
     (zero relative velocity at the wall, the edge and the vertex alike); free slip: each
     face reflects the normal component. ``hydro``: p_G = p_a + rho_a g.(x_G - x_a), as the
-    density the Tait equation gives it."""
-    p = np.empty(3)
-    vel = np.empty(3)
+    density the Tait equation gives it. ``p``, ``vel``, ``mean``: scratch for 3 each."""
     p[0], p[1], p[2] = xa, ya, za
     vel[0], vel[1], vel[2] = ua, va, wa
     n = 0
-    mean = np.zeros(3)
+    mean[0] = mean[1] = mean[2] = 0.0
     for f in (f1, f2, f3):
         if f >= 0:
             _reflect(p, vel, pl, f, no_slip)
@@ -185,7 +188,7 @@ def refresh_ghosts(x, y, z, u, v, w, rho, m, gidx, src, f1, f2, f3, pl, no_slip,
         a = src[j]
         x[g], y[g], z[g], u[g], v[g], w[g], rho[g] = ghost_state(
             x[a], y[a], z[a], u[a], v[a], w[a], rho[a], pl, f1[j], f2[j], f3[j], no_slip,
-            hydro, gx, gy, gz, rho0, B, gamma)
+            hydro, gx, gy, gz, rho0, B, gamma, np.empty(3), np.empty(3), np.empty(3))
         m[g] = m[a] if active[j] else 0.0
 
 
@@ -211,6 +214,21 @@ def ghost_activity(x, y, z, src, f1, f2, f3, pl, reach, active):
     return n_on
 
 
+@njit(**_JIT, inline="always")
+def fluid_within(g, x, y, z, kind, nb_start, nb_idx, support2):
+    """How many fluid neighbours of particle g are within the support."""
+    k = 0
+    for i in range(nb_start[g], nb_start[g + 1]):
+        b = nb_idx[i]
+        if kind[b] == 0:
+            dx = x[g] - x[b]
+            dy = y[g] - y[b]
+            dz = z[g] - z[b]
+            if dx * dx + dy * dy + dz * dz < support2:
+                k += 1
+    return k
+
+
 @njit(parallel=True, **_JIT)
 def dormant_ghost_near_fluid(x, y, z, kind, gidx, active, nb_start, nb_idx, support2):
     """Whether a dormant ghost has a fluid neighbour within the support."""
@@ -218,53 +236,52 @@ def dormant_ghost_near_fluid(x, y, z, kind, gidx, active, nb_start, nb_idx, supp
     for j in prange(gidx.shape[0]):
         if active[j]:
             continue
-        g = gidx[j]
-        for k in range(nb_start[g], nb_start[g + 1]):
-            b = nb_idx[k]
-            if kind[b] == 0:
-                dx = x[g] - x[b]
-                dy = y[g] - y[b]
-                dz = z[g] - z[b]
-                if dx * dx + dy * dy + dz * dz < support2:
-                    bad += 1
+        bad += fluid_within(gidx[j], x, y, z, kind, nb_start, nb_idx, support2)
     return bad > 0
+
+
+@njit(**_JIT, inline="always")
+def push_back_of(xa, ya, za, ua, va, wa, pl, f, reach):
+    """Particle a after face ``f``'s push-back: if it crossed the face (within ``reach``
+    behind it, projecting onto it) it is reflected back, its normal velocity relative to the
+    wall reversed where it points out of the fluid: (x, y, z, u, v, w, 1), else unchanged
+    with 0."""
+    k = int(pl[f, 0])
+    s = pl[f, 2]
+    if k == 0:
+        q, un = xa, ua
+    elif k == 1:
+        q, un = ya, va
+    else:
+        q, un = za, wa
+    d = s * (q - pl[f, 1])
+    if not (d <= 0.0 and d > -reach):
+        return xa, ya, za, ua, va, wa, 0
+    t1 = xa if k == 2 else (ya if k == 0 else za)
+    t2 = ya if k == 2 else (za if k == 0 else xa)
+    if not (t1 >= pl[f, 3] and t1 <= pl[f, 4] and t2 >= pl[f, 5] and t2 <= pl[f, 6]):
+        return xa, ya, za, ua, va, wa, 0
+    q = q - 2.0 * s * d
+    rel = s * (un - pl[f, 7 + k])
+    if rel < 0.0:
+        un = un - 2.0 * s * rel
+    if k == 0:
+        return q, ya, za, un, va, wa, 1
+    if k == 1:
+        return xa, q, za, ua, un, wa, 1
+    return xa, ya, q, ua, va, un, 1
 
 
 @njit(parallel=True, **_JIT)
 def push_back(x, y, z, u, v, w, kind, pl, reach):
-    """A fluid particle that crossed a face (within ``reach`` behind it, projecting onto
-    it) is reflected back, its normal velocity relative to the wall reversed where it points
-    out of the fluid. Returns how many were."""
+    """A fluid particle that crossed a face (:func:`push_back_of`, face by face) is put back.
+    Returns how many were."""
     count = 0
     for a in prange(x.shape[0]):
         if kind[a] != 0:
             continue
         for f in range(pl.shape[0]):
-            k = int(pl[f, 0])
-            s = pl[f, 2]
-            if k == 0:
-                q, un = x[a], u[a]
-            elif k == 1:
-                q, un = y[a], v[a]
-            else:
-                q, un = z[a], w[a]
-            d = s * (q - pl[f, 1])
-            if not (d <= 0.0 and d > -reach):
-                continue
-            t1 = x[a] if k == 2 else (y[a] if k == 0 else z[a])
-            t2 = y[a] if k == 2 else (z[a] if k == 0 else x[a])
-            if not (t1 >= pl[f, 3] and t1 <= pl[f, 4] and t2 >= pl[f, 5]
-                    and t2 <= pl[f, 6]):
-                continue
-            q = q - 2.0 * s * d
-            rel = s * (un - pl[f, 7 + k])
-            if rel < 0.0:
-                un = un - 2.0 * s * rel
-            if k == 0:
-                x[a], u[a] = q, un
-            elif k == 1:
-                y[a], v[a] = q, un
-            else:
-                z[a], w[a] = q, un
-            count += 1
+            x[a], y[a], z[a], u[a], v[a], w[a], k = push_back_of(
+                x[a], y[a], z[a], u[a], v[a], w[a], pl, f, reach)
+            count += k
     return count
