@@ -56,6 +56,9 @@ CASES = [
      {"constant/sphProperties:boundary": {"type": "mDBC", "noSlip": "no"}}),
     ("damBreak mDBC", "damBreak", 0.02, 300, {"constant/sphProperties:boundary":
                                               {"type": "mDBC"}}),
+    # mirrored ghosts across a 3-D box tank's faces (edge and vertex ghosts)
+    ("damBreakMatched3D mirrorGhosts", "damBreakMatched3D", 0.05, 200,
+     {"constant/sphProperties:boundary": {"type": "mirrorGhosts"}}),
 ]
 
 

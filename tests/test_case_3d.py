@@ -399,6 +399,56 @@ walls
     assert not sim.pipeline.selection.still_walls
 
 
+def test_a_3d_displacement_table_moves_its_block_and_a_2d_table_is_refused(tmp_path):
+    """A block wall moved by a displacement table of (t (dx dy dz)) rows in 3-D: after a
+    few steps its particles sit at their set-up position plus the table's displacement,
+    interpolated linearly, on all three axes, and move at its slope; a table of (dx dy)
+    rows, or a paddle's (x y) direction, in a 3-D case is refused naming the entry."""
+    from sphfoam.assemble import build_simulation
+    from sphfoam.setup.initial import generate_case
+
+    walls = """dimension 3; dx 0.05;
+fluid { water { type box; min (0 0 0); max (1 0.3 0.3); } }
+walls
+{
+    tank   { type box; min (-0.5 0 0); max (1 0.3 0.6); layers 3; open (top left); }
+    paddle
+    {
+        type block; min (-0.15 0.05 0); max (0 0.25 0.6); layers 3;
+        motion { type displacementTable; table ((0 (0 0 0)) (1 (0.2 -0.1 0.05))); }
+    }
+}
+"""
+    case = _copy(tmp_path)
+    _particle_dict(case, walls)
+    c = Case(case)
+    st = generate_case(c)
+    sim = build_simulation(c, st)
+    for _ in range(10):
+        sim.step()
+    st = sim.state
+    t = sim.time
+    paddle = st.extra["patch"] == 1
+    assert t > 0
+    for k, (pos, vel, d) in enumerate(zip(st.positions, st.velocities, (0.2, -0.1, 0.05))):
+        x0 = st.extra["xyz"[k] + "0"][paddle]
+        assert np.allclose(pos[paddle], x0 + d * t, rtol=0, atol=1e-12), k
+        assert np.allclose(vel[paddle], d, rtol=0, atol=1e-12), k
+    tank = st.extra["patch"] == 0
+    assert np.array_equal(st.z[tank], st.extra["z0"][tank])
+    for motion, key in (("{ type displacementTable; table ((0 (0 0)) (1 (0.2 0))); }",
+                         "table"),
+                        ("{ type pistonPaddle; direction (1 0); "
+                         "waveMaker { type goring; height 0.03; depth 0.3; } }", "direction")):
+        bad = _copy(tmp_path / key)
+        _particle_dict(bad, walls.replace(
+            "motion { type displacementTable; table ((0 (0 0 0)) (1 (0.2 -0.1 0.05))); }",
+            f"motion {motion}"))
+        with pytest.raises(CaseError, match=rf"walls.paddle.motion.{key}: motion '\w+' "
+                                            r"gives 2 components; a 3-D case needs \(x y z\)"):
+            Case(bad).validate()
+
+
 def test_a_2d_block_wall_gets_its_rows_inside_and_the_fluid_outside(tmp_path):
     """``type block`` works in 2-D as in 3-D: rows of wall particles inside its edges, the
     fluid outside, half a spacing off."""

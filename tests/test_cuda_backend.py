@@ -398,7 +398,8 @@ def test_health_checks_run_on_the_device():
     assert res["nan_kind"] == "nan" and res["nan_ids"] == [res["nan_id"]], res
 
 
-def test_a_3d_case_is_served_and_a_motion_with_no_3d_form_is_refused_by_name(tutorial):
+def test_a_3d_case_is_served_and_a_motion_with_no_3d_form_is_refused_by_name(tutorial,
+                                                                           monkeypatch):
     from sphfoam.assemble import selection
     from sphfoam.case.case import Case
     from sphfoam.engine.cuda.build import Unsupported, check_supported, parameters
@@ -411,7 +412,9 @@ def test_a_3d_case_is_served_and_a_motion_with_no_3d_form_is_refused_by_name(tut
     assert prm["gz"] == case.context.g[2] and prm["ly"] == prm["half_ly"] * 2 == 0.55
     assert "lx" not in prm and "lz" not in prm
     table = registry.build("motion", {"type": "displacementTable",
-                                      "table": [(0.0, (0.0, 0.0)), (1.0, (0.1, 0.0))]})
+                                      "table": [(0.0, (0.0, 0.0, 0.0)), (1.0, (0.1, 0, 0))]})
+    check_supported(sel, {1: table})                # so has the displacement table
+    monkeypatch.setattr(type(table), "dims", (2,))  # a motion written for 2-D only
     with pytest.raises(Unsupported, match="motion 'displacementTable': no 3-D form"):
         check_supported(sel, {1: table})
 

@@ -50,7 +50,26 @@ def test_table_from_a_file_in_the_case(tmp_path):
     assert m.displacement(2.0) == pytest.approx(table(table=ROWS).displacement(2.0))
 
 
+def test_a_3d_table_and_file_give_three_components(tmp_path):
+    rows = [(t, (*d, 0.5 * d[0])) for t, d in ROWS]
+    m = table(table=rows)
+    assert m.components == 3
+    assert m.displacement(2.0) == pytest.approx((0.1, -0.1, 0.05))
+    assert m.velocity(2.0) == pytest.approx((0.0, -0.1, 0.0))
+    assert m.velocity(9.0) == (0.0, 0.0, 0.0)
+    (tmp_path / "constant").mkdir()
+    np.savetxt(tmp_path / "constant" / "paddle.dat", [[t, *d] for t, d in rows])
+    f = table(file="constant/paddle.dat", interpolation="spline")
+    assert f.components is None
+    f.resolve(tmp_path)
+    assert f.components == 3
+    for t, d in rows:
+        assert f.displacement(t) == pytest.approx(d, abs=1e-12)
+
+
 @pytest.mark.parametrize("kw", [{}, {"table": ROWS, "file": "x.dat"},
+                                {"table": [(0.0, (0.0, 0.0)), (1.0, (0.0, 0.0, 0.0))]},
+                                {"table": [(0.0, (0.0,)), (1.0, (0.0,))]},
                                 {"table": [(0.0, (0.0, 0.0))]},
                                 {"table": [(1.0, (0.0, 0.0)), (0.5, (0.0, 0.0))]}])
 def test_bad_tables_are_rejected(kw):

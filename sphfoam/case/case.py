@@ -225,6 +225,13 @@ class Case:
             except (OSError, ValueError) as e:
                 problems.append(Problem(pd_file, f"walls.{name}.motion.file", str(e)))
                 continue
+            n = mot.components
+            if n is not None and n != self.dimension:
+                problems.append(Problem(
+                    pd_file, f"walls.{name}.motion.{mot.components_key}",
+                    f"motion {mot.name!r} gives {n} components; a {self.dimension}-D case "
+                    f"needs {('(x y)', '(x y z)')[self.dimension - 2]}"))
+                continue
             motions[i] = mot
         if problems:
             raise CaseError(problems)

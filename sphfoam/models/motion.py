@@ -18,7 +18,6 @@ from pydantic import Field, field_validator, model_validator
 
 import sphfoam.registry as registry
 from sphfoam.case import foamdict
-from sphfoam.case.schemas import Vector2
 from sphfoam.registry import Coeffs, Model, register
 
 
@@ -29,6 +28,15 @@ class Motion(Model, abc.ABC):
 
     def resolve(self, case_path: Path) -> None:
         """Load whatever the motion reads from the case (e.g. a table file)."""
+
+    @property
+    def components(self) -> int | None:
+        """How many components its displacement has (2 or 3, the case's dimension), where
+        it says (None: whatever the case's dimension)."""
+        return None
+
+    #: the entry that sets ``components`` (an error names it)
+    components_key = "type"
 
     @abc.abstractmethod
     def displacement(self, t: float) -> tuple[float, float]:
@@ -82,6 +90,12 @@ class PistonPaddle(Motion):
         super().__init__(coeffs)
         self.maker = registry.build("waveMaker", self.coeffs.waveMaker)
 
+    components_key = "direction"
+
+    @property
+    def components(self) -> int:
+        return len(self.coeffs.direction)
+
     def displacement(self, t):
         X = self.maker.position(t)
         return tuple(X * c for c in self.coeffs.direction)
@@ -93,19 +107,22 @@ class PistonPaddle(Motion):
 
 @register
 class DisplacementTable(Motion):
-    """A displacement table: rows (t (dx dy)) inline in ``table`` or columns ``t dx dy`` in
-    ``file`` (relative to the case), interpolated linearly (velocity piecewise constant, as
-    OpenFOAM's tables) or by a C2 cubic spline; before the first and after the last time the
-    wall holds still at the end values."""
+    """A displacement table: rows (t (dx dy)) in 2-D or (t (dx dy dz)) in 3-D inline in
+    ``table``, or columns ``t dx dy [dz]`` in ``file`` (relative to the case), interpolated
+    linearly (velocity piecewise constant, as OpenFOAM's tables) or by a C2 cubic spline;
+    before the first and after the last time the wall holds still at the end values."""
 
     name = "displacementTable"
-    doc = "rigid displacement interpolated from a table of (t (dx dy)), inline or from a file"
+    doc = ("rigid displacement interpolated from a table of (t (dx dy)) or (t (dx dy dz)), "
+           "inline or from a file")
+    dims = (2, 3)
 
     class Coeffs(Coeffs):
-        table: list[tuple[float, Vector2]] | None = Field(None, description="( (t (dx dy)) ... )")
-        file: str | None = Field(None, description="file with columns t dx dy, relative to "
-                                 "the case (and inside it), or an absolute path to use a "
-                                 "file elsewhere on purpose")
+        table: list[tuple[float, tuple[float, ...]]] | None = Field(
+            None, description="( (t (dx dy)) ... ) in 2-D, ( (t (dx dy dz)) ... ) in 3-D")
+        file: str | None = Field(None, description="file with columns t dx dy (3-D: t dx dy "
+                                 "dz), relative to the case (and inside it), or an absolute "
+                                 "path to use a file elsewhere on purpose")
         interpolation: Literal["linear", "spline"] = "linear"
 
         @model_validator(mode="after")
@@ -116,6 +133,10 @@ class DisplacementTable(Motion):
                 t = [r[0] for r in self.table]
                 if len(t) < 2 or any(b <= a for a, b in zip(t, t[1:])):
                     raise ValueError("table needs at least two rows with strictly increasing t")
+                n = {len(r[1]) for r in self.table}
+                if len(n) != 1 or n.pop() not in (2, 3):
+                    raise ValueError("every row's displacement needs the same 2 (dx dy) or "
+                                     "3 (dx dy dz) components")
             return self
 
     def __init__(self, coeffs=None):
@@ -123,11 +144,20 @@ class DisplacementTable(Motion):
         c = self.coeffs
         self._data = None
         if c.table is not None:
-            self._set(np.array([[t, d[0], d[1]] for t, d in c.table], float), "table")
+            self._set(np.array([[t, *d] for t, d in c.table], float), "table")
+
+    @property
+    def components(self) -> int | None:
+        """2 or 3 (the table's or the file's), None before the file is read."""
+        return None if self._data is None else self._data.shape[1] - 1
+
+    @property
+    def components_key(self) -> str:
+        return "table" if self.coeffs.file is None else "file"
 
     def _set(self, data: np.ndarray, where: str):
-        if data.ndim != 2 or data.shape[1] != 3 or data.shape[0] < 2:
-            raise ValueError(f"{where}: needs at least two rows of t dx dy")
+        if data.ndim != 2 or data.shape[1] not in (3, 4) or data.shape[0] < 2:
+            raise ValueError(f"{where}: needs at least two rows of t dx dy (3-D: t dx dy dz)")
         if not np.isfinite(data).all():
             raise ValueError(f"{where}: holds a non-finite number (inf or nan)")
         if np.any(np.diff(data[:, 0]) <= 0):
@@ -159,15 +189,15 @@ class DisplacementTable(Motion):
         d = self._data
         if self.coeffs.interpolation == "spline":
             return tuple(float(v) for v in self._spline(tc))
-        return (float(np.interp(tc, d[:, 0], d[:, 1])), float(np.interp(tc, d[:, 0], d[:, 2])))
+        return tuple(float(np.interp(tc, d[:, 0], d[:, k])) for k in range(1, d.shape[1]))
 
     def velocity(self, t):
         tc, outside = self._clamp(t)
-        if outside:
-            return (0.0, 0.0)
         d = self._data
+        if outside:
+            return (0.0,) * (d.shape[1] - 1)
         if self.coeffs.interpolation == "spline":
             return tuple(float(v) for v in self._spline(tc, 1))
         i = int(np.clip(np.searchsorted(d[:, 0], tc, side="right") - 1, 0, len(d) - 2))
         dt = d[i + 1, 0] - d[i, 0]
-        return ((d[i + 1, 1] - d[i, 1]) / dt, (d[i + 1, 2] - d[i, 2]) / dt)
+        return tuple((d[i + 1, k] - d[i, k]) / dt for k in range(1, d.shape[1]))
