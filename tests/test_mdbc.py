@@ -52,7 +52,8 @@ def _fit(fluid, rho, wall, offset, dx, hdx=1.3, g=(0.0, 0.0, 0.0), vel=None, U0=
         extra = (False, x[:0], x[:0], x[:0], x[:0], np.zeros((3, 0)), np.zeros((3, 0)))
     mdbc.wall_density(np.array([n - 1]), *off, np.array([0, n - 1]), np.arange(n - 1), x, y,
                       z, m, r, p, c, 0.0, 0.0, 0.0, hdx * dx, kernel.support, kernel.f_jit,
-                      det_min, RHO0, 1e5, 7.0, 10.0, *g, np.zeros((1, 4, 8)), *extra)
+                      det_min, RHO0, 1e5, 7.0, 10.0, *g, np.zeros((1, 4, 8)), *extra,
+                      np.array([0, 1]))
     if slip:
         return r[-1], p[-1], c[-1], out[:dim, 0]
     return r[-1], p[-1], c[-1]
@@ -339,6 +340,23 @@ def test_mdbc_walls_hold_the_dam_break_under_each_integrator(tutorial, integrato
     f = s1["type"] == FLUID
     x, y = s1["positions"][f].T
     assert y.min() > 0.0 and x.min() > 0.0
+
+
+def test_balanced_chunks_split_the_walls_into_runs_of_equal_work():
+    """The fit's and the lists' parallel loops take contiguous runs of wall particles with
+    about equal work: every wall particle once, in order, whatever the lists hold."""
+    rng = np.random.default_rng(3)
+    counts = np.where(rng.uniform(size=1000) < 0.4, rng.integers(20, 80, 1000), 0)
+    counts[:500] = 0                                       # a dry half, as in a tank
+    starts = np.concatenate([[0], np.cumsum(counts)])
+    for parts in (1, 2, 64, 5000):
+        b = mdbc.balanced_chunks(starts, parts)
+        assert b[0] == 0 and b[-1] == 1000 and np.all(np.diff(b) >= 0) and len(b) == parts + 1
+    b = mdbc.balanced_chunks(starts, 2)
+    work = starts + 8 * np.arange(1001)
+    assert abs(work[b[1]] - work[-1] / 2) <= 80 + 8        # within one wall of the half
+    assert b[1] > 600                                      # not the plain split at 500
+    assert np.array_equal(mdbc.balanced_chunks(np.zeros(1, dtype=np.int64), 4), [0] * 5)
 
 
 @pytest.mark.parametrize("no_slip", ["yes", "no"])

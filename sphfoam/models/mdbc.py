@@ -61,7 +61,9 @@ grid the list uses, within a cell side (the support and the list's skin) of each
 the wall particles that can meet the fluid (less deep behind the wall than the support
 radius less dx/4); before each evaluation the fit runs over those lists, in compiled
 parallel loops (:func:`node_list` and :func:`fit_wall` per wall particle, which the device
-form, ``sphfoam.models.mdbc_cuda``, runs as device functions on backend cuda). Measured (cost, the 3-D dam break): docs/user-guide.md and
+form, ``sphfoam.models.mdbc_cuda``, runs as device functions on backend cuda), each thread
+a contiguous run of wall particles with about equal work (``balanced_chunks``). Measured
+(cost, the 3-D dam break): docs/user-guide.md and
 benchmarks/results/damBreak3D-2026-12-05/README.md.
 """
 
@@ -141,18 +143,21 @@ def node_list(px, py, pz, three, x, y, kind, z, cell_start, x0, y0, z0, inv_cell
 
 @njit(parallel=True, **_JIT)
 def ghost_lists(walls, gx, gy, gz, x, y, z, kind, cell_start, x0, y0, z0, inv_cell, ncx,
-                ncy, ncz, lx, ly, lz, reach2, counts, fill, out_idx):
-    """Two passes over the wall particles ``walls`` (indices): ``fill`` False counts into
-    ``counts[k]`` the fluid particles within sqrt(reach2) of wall k's ghost node (gx, gy, gz:
-    the nodes' positions); ``fill`` True writes them into ``out_idx`` from ``counts[k]`` (the
-    running sum's start). 2-D: z and gz empty and ncz 1 (:func:`node_list`)."""
+                ncy, ncz, lx, ly, lz, reach2, counts, fill, out_idx, chunks):
+    """Two passes over the wall particles ``walls`` (indices), in parallel over the runs
+    ``chunks`` (:func:`balanced_chunks`): ``fill`` False counts into ``counts[k]`` the fluid
+    particles within sqrt(reach2) of wall k's ghost node (gx, gy, gz: the nodes' positions);
+    ``fill`` True writes them into ``out_idx`` from ``counts[k]`` (the running sum's start).
+    2-D: z and gz empty and ncz 1 (:func:`node_list`)."""
     three = z.shape[0] > 0
-    for k in prange(walls.shape[0]):
-        pz = gz[k] if three else 0.0
-        n = node_list(gx[k], gy[k], pz, three, x, y, kind, z, cell_start, x0, y0, z0,
-                      inv_cell, ncx, ncy, ncz, lx, ly, lz, reach2, fill, out_idx, counts[k])
-        if not fill:
-            counts[k] = n
+    for ch in prange(chunks.shape[0] - 1):
+        for k in range(chunks[ch], chunks[ch + 1]):
+            pz = gz[k] if three else 0.0
+            n = node_list(gx[k], gy[k], pz, three, x, y, kind, z, cell_start, x0, y0, z0,
+                          inv_cell, ncx, ncy, ncz, lx, ly, lz, reach2, fill, out_idx,
+                          counts[k])
+            if not fill:
+                counts[k] = n
 
 
 @njit(**_JIT)
@@ -346,36 +351,50 @@ def fit_wall(a, gox, goy, goz, lo, hi, idx, three, x, y, z, m, rho, lx, ly, lz, 
     return r, pw, cw, ug0 - dn * nx, ug1 - dn * ny, (ug2 - dn * nz) if three else 0.0
 
 
+def balanced_chunks(starts, parts: int = 64, per_wall: int = 8) -> np.ndarray:
+    """Bounds of ``parts`` contiguous runs of the wall particles with about equal work (the
+    list entries plus ``per_wall`` for each particle): the threads of a parallel loop over
+    them get equal shares. Wet walls lie together in the sorted order, so equal counts of
+    wall particles (prange's own split) left one of two threads most of the fit."""
+    n = len(starts) - 1
+    weight = starts + per_wall * np.arange(n + 1)
+    out = np.searchsorted(weight, np.linspace(0, weight[-1], parts + 1)).astype(np.int64)
+    out[0], out[-1] = 0, n
+    return np.maximum.accumulate(out)
+
+
 @njit(parallel=True, **_JIT)
 def wall_density(walls, ox, oy, oz, starts, idx, x, y, z, m, rho, p, c, lx, ly, lz, h,
                  support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work, slip, u,
-                 v, w, corner, U0, out_u):
+                 v, w, corner, U0, out_u, chunks):
     """:func:`fit_wall` for each wall particle ``walls[k]``, over its node's list
     ``idx[starts[k]:starts[k + 1]]``, with the scratch ``work[k]`` (len(walls), 4, 8): its
     rho, p and c set, and with ``slip`` its pair passes' velocity into ``out_u`` (dim,
-    len(walls); U0 the prescribed, (dim, len(walls))). 2-D: z and oz empty; no slip: u, v,
-    w, corner, U0 and out_u may be empty."""
+    len(walls); U0 the prescribed, (dim, len(walls))); in the runs ``chunks`` of equal work
+    (:func:`balanced_chunks`), in parallel. 2-D: z and oz empty; no slip: u, v, w, corner,
+    U0 and out_u may be empty."""
     three = z.shape[0] > 0
-    for k in prange(walls.shape[0]):
-        a = walls[k]
-        goz = oz[k] if three else 0.0
-        cor = U0x = U0y = U0z = 0.0
-        if slip:
-            cor, U0x, U0y = corner[k], U0[0, k], U0[1, k]
-            if three:
-                U0z = U0[2, k]
-        r, pw, cw, ux, uy, uz = fit_wall(
-            a, ox[k], oy[k], goz, starts[k], starts[k + 1], idx, three, x, y, z, m, rho, lx,
-            ly, lz, h, support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz, work[k],
-            slip, u, v, w, cor, U0x, U0y, U0z)
-        rho[a] = r
-        p[a] = pw
-        c[a] = cw
-        if slip:
-            out_u[0, k] = ux
-            out_u[1, k] = uy
-            if three:
-                out_u[2, k] = uz
+    for ch in prange(chunks.shape[0] - 1):
+        for k in range(chunks[ch], chunks[ch + 1]):
+            a = walls[k]
+            goz = oz[k] if three else 0.0
+            cor = U0x = U0y = U0z = 0.0
+            if slip:
+                cor, U0x, U0y = corner[k], U0[0, k], U0[1, k]
+                if three:
+                    U0z = U0[2, k]
+            r, pw, cw, ux, uy, uz = fit_wall(
+                a, ox[k], oy[k], goz, starts[k], starts[k + 1], idx, three, x, y, z, m, rho,
+                lx, ly, lz, h, support, kernel_f, det_min, rho0, B, gamma, c0, gx, gy, gz,
+                work[k], slip, u, v, w, cor, U0x, U0y, U0z)
+            rho[a] = r
+            p[a] = pw
+            c[a] = cw
+            if slip:
+                out_u[0, k] = ux
+                out_u[1, k] = uy
+                if three:
+                    out_u[2, k] = uz
 
 
 @njit(parallel=True, **_JIT)
@@ -499,20 +518,27 @@ class ModifiedDynamic(Boundary):
         grid = (cells.x0, cells.y0, cells.z0, 1.0 / cells.cell_size, cells.ncx, cells.ncy,
                 cells.ncz if three else 1, cells.lx, cells.ly, cells.lz if three else 0.0,
                 cells.cell_size ** 2)
+        # the counting pass's shares: by the last build's lists where the same wall
+        # particles are fitted (walls stay in their cells, so their order in the sort
+        # holds), else equal numbers of them; each walks its node's cells (the wall
+        # particles there too), so more work per wall particle than the fit's
+        same = self._lists is not None and len(self._lists[0]) == len(walls)
+        starts = self._lists[4] if same else np.zeros(len(walls) + 1, dtype=np.int64)
+        chunks = balanced_chunks(starts, per_wall=48)
         starts = np.zeros(len(walls) + 1, dtype=np.int64)      # the counts, then their sum
         ghost_lists(walls, gx, gy, gz, st.x, st.y, z, st.kind, cells.cell_start, *grid,
-                    starts[1:], False, starts[:0])
+                    starts[1:], False, starts[:0], chunks)
         np.cumsum(starts, out=starts)
         idx = np.empty(int(starts[-1]), dtype=np.int64)
+        chunks = balanced_chunks(starts)
         ghost_lists(walls, gx, gy, gz, st.x, st.y, z, st.kind, cells.cell_start, *grid,
-                    starts[:-1].copy(), True, idx)
+                    starts[:-1].copy(), True, idx, chunks)
         # the fit's scratch, kept while the number of fitted wall particles stays
-        work = self._lists[-1] if self._lists is not None and \
-            len(self._lists[-1]) == len(walls) else np.zeros((len(walls), 4, 8))
+        work = self._lists[7] if same else np.zeros((len(walls), 4, 8))
         corner = np.ascontiguousarray(st.extra["corner"][walls]) if self._slip else ox[:0]
         self._lists = (walls, np.ascontiguousarray(ox[walls]), np.ascontiguousarray(oy[walls]),
                        np.ascontiguousarray(oz[walls]) if three else ox[:0], starts, idx,
-                       corner, work)
+                       corner, work, chunks)
         self._sum = None
         self._uw = self._U0 = None          # indexed by the old order: made again before use
 
@@ -524,7 +550,7 @@ class ModifiedDynamic(Boundary):
         st = run.state
         three = st.dim == 3
         z = st.z if three else st.x[:0]
-        walls, ox, oy, oz, starts, idx, corner, work = self._lists
+        walls, ox, oy, oz, starts, idx, corner, work, chunks = self._lists
         if self._slip:
             u, v = st.velocities[:2]
             w = st.velocities[2] if three else st.x[:0]
@@ -544,7 +570,7 @@ class ModifiedDynamic(Boundary):
         wall_density(walls, ox, oy, oz, starts, idx, st.x, st.y, z, st.m, st.rho, st.p, st.c,
                      cells.lx, cells.ly, cells.lz if three else 0.0, run.h,
                      self._support, self._kernel_f, self._det_min, rho0, B, gamma, c0,
-                     *self._g, work, self._slip, u, v, w, corner, U0, uw)
+                     *self._g, work, self._slip, u, v, w, corner, U0, uw, chunks)
         self._U0, self._uw = U0, uw
         self._sum = now
 
