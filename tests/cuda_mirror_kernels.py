@@ -126,11 +126,17 @@ def main(working=np.float64) -> dict:
     return out
 
 
-if __name__ == "__main__":
+def report(check, single_keys) -> None:
+    """Print ``RESULT {...}``: ``check()`` in double precision, with ``single_keys`` of
+    ``check(np.float32)`` added as ``*_single`` (an exception as one line)."""
     try:
-        res = main()
-        single = main(np.float32)
-        res.update({f"{k}_single": single[k] for k in ("state", "push_back", "shear")})
+        res = check()
+        single = check(np.float32)
+        res.update({f"{k}_single": single[k] for k in single_keys})
     except Exception as e:  # noqa: BLE001  (reported as one line: the test reads it)
         res = {"error": f"{type(e).__name__}: {e}"}
     print("RESULT " + json.dumps(res), flush=True)
+
+
+if __name__ == "__main__":
+    report(main, ("state", "push_back", "shear"))

@@ -60,3 +60,21 @@ def test_every_launched_kernel_compiles_to_sm90_ptx():
         assert any(k in name for name in kernels), (k, p.stdout, p.stderr[-2000:])
     failed = [ln for ln in lines if not ln.endswith(": ok")]
     assert p.returncode == 0 and not failed, "\n".join(failed) + p.stderr[-3000:]
+
+
+@pytest.mark.skipif(bool(_WHY_NOT), reason="no NVVM/NVRTC to compile with (pip install "
+                    f"'numba-cuda[cu13]'): {_WHY_NOT[:200]}")
+def test_mdbc_kernels_compile_with_and_without_slip():
+    """mDBC's fit kernel holds the free-slip branch whatever the case selects: a device
+    types it with the no-slip case's arguments too (the simulator does not)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_NUM_THREADS="1")
+    env.pop("NUMBA_ENABLE_CUDASIM", None)
+    for slip in ("yes", "no"):
+        edits = '{"constant/sphProperties:boundary": {"type": "mDBC", "noSlip": "%s"}}' % slip
+        p = subprocess.run([sys.executable, "-m", "sphfoam.cudaptx", "damBreakMatched",
+                            "--dx", "0.2", "--edits", edits], env=env, capture_output=True,
+                           text=True, timeout=900)
+        lines = p.stdout.splitlines()
+        assert any("fit_walls" in ln for ln in lines), p.stdout + p.stderr[-2000:]
+        failed = [ln for ln in lines if not ln.endswith(": ok")]
+        assert p.returncode == 0 and not failed, "\n".join(failed) + p.stderr[-3000:]

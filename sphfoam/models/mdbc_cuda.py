@@ -28,12 +28,11 @@ gravity, dx) is the model's own ``attach``, run on a copy of it.
 from __future__ import annotations
 
 import copy
-import types
 
 import numpy as np
 from numba import cuda, float64
 
-from sphfoam.engine.cuda.device import device_function, exclusive_scan
+from sphfoam.engine.cuda.device import device_function, exclusive_scan, kernel_with
 from sphfoam.engine.state import WALL
 from sphfoam.models import mdbc
 
@@ -109,22 +108,10 @@ def _fit(x, y, z, three, m, rho, p, c, u, v, w, ox, oy, oz, corner, fitted, star
             uw[2, a] = uz
 
 
-_FIT_KERNELS: dict[int, object] = {}
-
-
 def fit_kernel(kernel_f):
     """The fit's kernel with the smoothing kernel's ``kernel_f`` (a jitted f(q)) bound as a
-    device function: a copy of :func:`_fit` per kernel (as ``device_function`` binds
-    helpers)."""
-    key = id(kernel_f)
-    if key not in _FIT_KERNELS:
-        glb = dict(_fit.__globals__, kernel_f=device_function(kernel_f))
-        kernel = cuda.jit(types.FunctionType(_fit.__code__, glb, "fit_walls"))
-        py = getattr(kernel_f, "py_func", kernel_f)
-        #: how to make it again (the PTX check, :mod:`sphfoam.cudaptx`)
-        kernel.made_by = (__name__, "fit_kernel", py.__module__, py.__name__)
-        _FIT_KERNELS[key] = kernel
-    return _FIT_KERNELS[key]
+    device function: a copy of :func:`_fit` per kernel."""
+    return kernel_with(_fit, "fit_walls", "kernel_f", kernel_f, (__name__, "fit_kernel"))
 
 
 @cuda.jit
@@ -153,6 +140,9 @@ class ModifiedDynamicDevice:
         self._scratch = None
         self._velocities = None
         self._none = run.cuda.device_array(0, dtype=np.int64)
+        #: no slip: the velocities' (unread) stand-ins, of the type the kernel compiles
+        #: for (a device compiles the free-slip branch too)
+        self._no_velocities = run.cuda.device_array((3, 0), dtype=np.float64)
 
     def _fields(self, run):
         f = run.field
@@ -195,7 +185,7 @@ class ModifiedDynamicDevice:
         three = self.three
         z, w = (d["z"], d["w"]) if three else (d["x"], d["x"])
         corner = run.field("corner") if self.slip else ox
-        U0, uw = self._velocities if self.slip else (self._none, self._none)
+        U0, uw = self._velocities if self.slip else (self._no_velocities,) * 2
         h = self.host
         rho0, B, gamma, c0 = h._eos
         run.launch(self.fit, run.n, d["x"], d["y"], z, three, d["m"], d["rho"], d["p"],

@@ -36,6 +36,25 @@ def device_function(fn):
     return out
 
 
+_BOUND: dict[tuple[int, int], object] = {}
+
+
+def kernel_with(template, name: str, global_name: str, function, factory: tuple[str, str]):
+    """A copy of the kernel ``template`` (a plain Python function) named ``name``, with the
+    jitted scalar ``function`` bound as its global ``global_name``, compiled as a device
+    function (as :func:`device_function` binds helpers): one per (template, function).
+    ``factory`` (module, name) is the function that makes it from ``function``, recorded as
+    ``made_by`` for the PTX check (:mod:`sphfoam.cudaptx`)."""
+    key = (id(template), id(function))
+    if key not in _BOUND:
+        glb = dict(template.__globals__, **{global_name: device_function(function)})
+        kernel = cuda.jit(types.FunctionType(template.__code__, glb, name))
+        py = getattr(function, "py_func", function)
+        kernel.made_by = (*factory, py.__module__, py.__name__)
+        _BOUND[key] = kernel
+    return _BOUND[key]
+
+
 THREADS = 128
 
 

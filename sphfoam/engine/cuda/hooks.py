@@ -7,12 +7,11 @@ Imported only once numba.cuda can run (:func:`sphfoam.engine.cuda.cuda_module`).
 
 from __future__ import annotations
 
-import types
 
 import numpy as np
 from numba import cuda
 
-from sphfoam.engine.cuda.device import THREADS, blocks, device_function
+from sphfoam.engine.cuda.device import THREADS, blocks, kernel_with
 from sphfoam.engine.hookforms import (AdvectionCorrection, AuxAddition, WallField,
                                       WallVelocity, device_forms)
 from sphfoam.engine.state import WALL
@@ -70,22 +69,12 @@ def _wall_field(x, y, seg, out):
     out[a] = wall_function(x[a], y[a], seg)  # noqa: F821  (bound per function)
 
 
-_FIELD_KERNELS: dict[int, object] = {}
-
-
 def wall_field_kernel(function):
     """The kernel out[a] = ``function(x[a], y[a], seg)`` (``function`` a jitted scalar
     function, compiled as a device function: the host loop's arithmetic), bound as a global
-    of its own copy of :func:`_wall_field` (as ``device_function`` binds helpers)."""
-    key = id(function)
-    if key not in _FIELD_KERNELS:
-        glb = dict(_wall_field.__globals__, wall_function=device_function(function))
-        kernel = cuda.jit(types.FunctionType(_wall_field.__code__, glb, "wall_field"))
-        py = getattr(function, "py_func", function)
-        #: how to make it again (the PTX check, :mod:`sphfoam.cudaptx`)
-        kernel.made_by = (__name__, "wall_field_kernel", py.__module__, py.__name__)
-        _FIELD_KERNELS[key] = kernel
-    return _FIELD_KERNELS[key]
+    of its own copy of :func:`_wall_field`."""
+    return kernel_with(_wall_field, "wall_field", "wall_function", function,
+                       (__name__, "wall_field_kernel"))
 
 
 class DeviceHooks:
