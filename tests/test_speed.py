@@ -29,7 +29,7 @@ def _real(sim):
     real = st.kind != GHOST
     order = np.argsort(st.id[real], kind="stable")
     return {k: np.asarray(getattr(st, k)[real][order], dtype=np.float64)
-            for k in ("x", "y", "u", "v", "rho")}
+            for k in ("x", "y", "u", "v", "rho") + (("z", "w") if st.dim == 3 else ())}
 
 
 # --- precision ---------------------------------------------------------------------------
@@ -375,10 +375,15 @@ def test_reaction_and_parity_declarations_are_checked():
                   reaction="acc_b_x += gWx")], set(), {})
 
 
-def test_half_lists_give_the_same_results_with_one_and_two_threads(tutorial):
-    """The bands of the half-list loops do not depend on the thread count, so neither does
-    the order of any sum: 30 steps with one and with two threads are bit for bit equal."""
+@pytest.mark.parametrize("dim", [2, 3])
+def test_half_lists_give_the_same_results_with_one_and_two_threads(tutorial, dim):
+    """The bands of the half-list loops (in 3-D the blocks of rows and their four colours)
+    do not depend on the thread count, so neither does the order of any sum: 30 steps of
+    the dam break (10 of the matched 3-D one) with one and with two threads are bit for bit
+    equal."""
     import numba
+
+    from test_three_d_engine import MATCHED3D, _small_matched_3d
 
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("needs NUMBA_NUM_THREADS >= 2")
@@ -387,8 +392,9 @@ def test_half_lists_give_the_same_results_with_one_and_two_threads(tutorial):
     try:
         for threads in (1, 2):
             numba.set_num_threads(threads)
-            sim = _sim(tutorial, "damBreak", {"system/particleDict:dx": 0.02})
-            for _ in range(30):
+            sim = _sim(tutorial, "damBreak", {"system/particleDict:dx": 0.02}) if dim == 2 \
+                else _small_matched_3d(Case(MATCHED3D))
+            for _ in range(30 if dim == 2 else 10):
                 sim.step()
             assert sim._half is not None
             out[threads] = _real(sim)

@@ -288,3 +288,70 @@ def test_a_3d_tank_at_rest_keeps_its_hydrostatic_bed_pressure():
     fluid = st.kind == 0
     speed = np.sqrt(st.u ** 2 + st.v ** 2 + st.w ** 2)[fluid]
     assert speed.max() < 0.02 * np.sqrt(9.81 * H)
+
+
+def _blocks(sim):
+    """(n, block starts, each colour's blocks in their dealt order, work per block) of
+    ``sim``'s 3-D half lists."""
+    half, n = sim._half, sim.state.n
+    nb = int(half[-1])
+    starts = half[n:n + nb + 1].astype(np.int64)
+    order = half[n + nb + 1:n + 2 * nb + 1].astype(np.int64)
+    cs = half[n + 2 * nb + 1:n + 2 * nb + 6].astype(np.int64)
+    start = sim._nb[0]
+    mid = half[:n].astype(np.int64)
+    work = np.array([(start[starts[b] + 1:starts[b + 1] + 1] - mid[starts[b]:starts[b + 1]]
+                      + 1).sum() for b in range(nb)])
+    return n, starts, [order[cs[c]:cs[c + 1]] for c in range(4)], work
+
+
+def test_3d_half_list_blocks_of_a_colour_write_disjoint_particles():
+    """In 3-D the half lists' layers of cells are cut into blocks of rows in four colours
+    (``neighbours.half_blocks``): the blocks of one colour, which threads run at once, write
+    disjoint particles (each block's own and its listed b > a), every particle is in one
+    block, and a layer of water gives several blocks (the matched dam break at dx = 0.1 m:
+    more blocks than layers of cells)."""
+    sim = _small_matched_3d(Case(MATCHED3D))
+    for _ in range(3):
+        sim.step()
+    n, starts, colours, _ = _blocks(sim)
+    start, idx = sim._nb
+    mid = sim._half[:n].astype(np.int64)
+    assert starts[0] == 0 and starts[-1] == n and np.all(np.diff(starts) >= 0)
+    assert sorted(np.concatenate(colours).tolist()) == list(range(len(starts) - 1))
+    assert len(starts) - 1 > sim.cells.ncz and all(len(c) for c in colours)
+    for blocks in colours:
+        owner = np.full(n, -1)
+        for b in blocks:
+            a = np.arange(starts[b], starts[b + 1])
+            wrote = np.unique(np.concatenate(
+                [a] + [idx[mid[i]:start[i + 1]] for i in a]).astype(np.int64))
+            assert np.all(owner[wrote] < 0), b
+            owner[wrote] = b
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3, 8])
+def test_3d_blocks_are_dealt_to_the_threads_by_work(threads):
+    """``neighbours.deal_blocks``: each colour's segment stays a permutation of its blocks,
+    and the contiguous shares prange hands out (the first ones one longer where they do
+    not divide evenly) hold at most the mean work plus the largest block's: the longest
+    processing time first, each block to the least loaded share with room."""
+    from sphfoam.engine.neighbours import deal_blocks
+
+    sim = _small_matched_3d(Case(MATCHED3D))
+    sim.step()
+    n, _, before, work = _blocks(sim)
+    deal_blocks(sim._half, n, threads, sim._nb[0])
+    _, _, after, _ = _blocks(sim)
+    for seg, old in zip(after, before):
+        assert sorted(seg.tolist()) == sorted(old.tolist())
+        q, r = divmod(len(seg), threads)
+        k = 0
+        loads = []
+        for t in range(threads):
+            size = q + (t < r)
+            loads.append(work[seg[k:k + size]].sum())
+            k += size
+        if len(seg):
+            assert max(loads) <= work[seg].sum() / threads + work[seg].max()
+

@@ -103,8 +103,10 @@ def _warm_up(module, prm):
     if hasattr(module, "step_pass"):
         module.step_pass(*args)
         funcs.append(module.step_pass)
-    # [nb_mid | band starts | the bands' dealt order | nb]: one band of both particles
-    half = np.array([0] * n + [0, n, 0, 1], dtype=np.uint32)
+    # [nb_mid | band starts | the bands' dealt order | nb]: one band of both particles (in
+    # 3-D also the colour starts before nb: the band is colour 0's)
+    half = np.array([0] * n + [0, n, 0] + ([0, 1, 1, 1, 1] if dim == 3 else []) + [1],
+                    dtype=np.uint32)
     if hasattr(module, "rates_half"):
         module.rates_half(*args, half, *(f.copy() for _ in range(dim)), f.copy(), f.copy())
         funcs.append(module.rates_half)

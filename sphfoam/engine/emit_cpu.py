@@ -32,11 +32,26 @@ for colour in range(2):
 {body}"""
 
 
+#: the 3-D form: blocks of rows within layers of cells, in four colours whose segments of the
+#: dealt order start at the colour starts (``neighbours.half_blocks``)
+_HALF_BLOCKS = """\
+n = x.shape[0]
+nb = int(half[half.shape[0] - 1])
+order = n + nb + 1
+for colour in range(4):
+    c0 = int(half[order + nb + colour])
+    for j in prange(int(half[order + nb + colour + 1]) - c0):
+        ib = n + int(half[order + c0 + j])
+        for a in range(half[ib], half[ib + 1]):
+{body}"""
+
+
 def _half_bands(dim: int, *parts: str) -> str:
-    """``_HALF_BANDS`` with ``parts`` (code of particle a) as the body."""
+    """``_HALF_BANDS`` (``_HALF_BLOCKS`` in 3-D) with ``parts`` (code of particle a) as the
+    body."""
     body = "\n".join([particle_load(dim), "ma = m[a]\nkinda = kind[a]",
                       *(_block(x, 0) for x in parts)])
-    return _HALF_BANDS.format(body=_block(body, 12))
+    return (_HALF_BLOCKS if dim == 3 else _HALF_BANDS).format(body=_block(body, 12))
 
 
 #: the 3 x 3 cell walk around particle ``a``, run once per step to build the neighbour list
@@ -419,6 +434,11 @@ def density_filter({_ARGS}, out_rho):
             start = "drho_a = 0.0"
             end = "out_drho[a] += drho_a"
         want = "\n    want_sigma = out_sigma.shape[0] > 0" if stage == "rates" else ""
+        bands_doc = ("(consecutive cell rows): the bands run in two colours, so that no two "
+                     "threads write\n    the same particle (a's neighbours b > a lie in a's "
+                     "band or the next)") if dim == 2 else \
+            ("(rows of cells within layers, neighbours.half_blocks): the bands run in four "
+             "colours,\n    so that no two threads write the same particle")
         sigma_doc = ("\n    An empty out_sigma: no sigma (an evaluation whose time step is not "
                      "taken from it).") if stage == "rates" else ""
         parts.append(f'''
@@ -428,8 +448,7 @@ def {name}({_ARGS}, half, {outs}):
     """{"rates" if stage == "rates" else "density_rate"} over half lists, the same sums in another order: each
     listed pair a < b once, for both particles (the terms' reactions). half[a] (a < n) is
     where the neighbours b > a start in a's list and half[n + i] the first particle of band
-    i (consecutive cell rows): the bands run in two colours, so that no two threads write
-    the same particle (a's neighbours b > a lie in a's band or the next).{sigma_doc}"""
+    i {bands_doc}.{sigma_doc}"""
 {_block(bind, 4)}{want}
     for a in prange(x.shape[0]):
 {_block(zero, 8)}
@@ -442,7 +461,7 @@ def {name}({_ARGS}, half, {outs}):
 @njit(parallel=True, fastmath={FASTMATH_SOURCE}, cache=True)
 def prepass_half({_ARGS}, half, hs):
     """The prepass over half lists, the same sums in another order: each listed pair a < b
-    once, for both particles (the terms' reactions), in the two colours of bands of
+    once, for both particles (the terms' reactions), in the colours of bands of
     ``rates_half``; the sums {", ".join(plan.prepass_half_sums())} in ``hs`` (one row each),
     then each particle's final code."""
 {_block(bind, 4)}

@@ -227,21 +227,18 @@ def deal_bands(half, n, threads):
 
 
 @njit(parallel=True, cache=True)
-def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start):
-    """Split the neighbour list for the half-list loops: ``nb_mid[a]`` is where the
-    neighbours b > a of particle a start in its list; the cell rows (``ncy`` rows of ``ncx``
-    cells; in 3-D, ``ncz`` layers of ``ncx ncy`` cells, the caller passes those) are grouped
-    into about
-    ``bands`` bands of consecutive rows holding about as many particles each, and
-    ``band_start[i]`` is the first particle of band i (``band_start[nb]`` = n). Returns the
-    number of bands nb; 0 unless, as the cell walk of particles sorted by cell makes them,
-    every list holds its b < a before its b > a and every b > a lies in a's cell row or the
-    next (so in a's band or the next): the loops then gather over the full lists. The
-    particles are split into ``REDUCTION_CHUNKS`` ranges run in parallel (each finds the
-    row of its first particle by bisection)."""
+def half_starts(nb_start, nb_idx, cell_start, ncx, ncy, ncz, split, nb_mid):
+    """``nb_mid[a]``: where the neighbours b > a of particle a start in its list, for cells
+    in ``ncz`` layers of ``ncy`` rows of ``ncx`` cells (2-D: layers of one row). True if, as
+    the cell walk of particles sorted by cell makes them, every list holds its b < a before
+    its b > a and every b > a lies in a's layer or the next; with ``split`` (y not
+    periodic), in a's row or the next of its layer or in the three rows around a's in the
+    next layer. The particles are split into ``REDUCTION_CHUNKS`` ranges run in parallel
+    (each finds the row of its first particle by bisection)."""
     n = nb_start.shape[0] - 1
-    if cell_start[ncy * ncx] != n:
-        return 0
+    rows = ncy * ncz
+    if cell_start[rows * ncx] != n:
+        return False
     nc = REDUCTION_CHUNKS
     bad = np.zeros(nc, dtype=np.bool_)
     for ci in prange(nc):
@@ -250,21 +247,32 @@ def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start
         if a1 <= a0:
             continue
         r_lo = 0                      # the last row starting at or before a0
-        r_hi = ncy
+        r_hi = rows
         while r_hi - r_lo > 1:
             mid = (r_lo + r_hi) // 2
             if cell_start[mid * ncx] <= a0:
                 r_lo = mid
             else:
                 r_hi = mid
-        r = r_lo
-        row_end = cell_start[(r + 1) * ncx]
-        top = cell_start[min(r + 2, ncy) * ncx]
+        r = r_lo - 1
+        row_end = 0
+        hi1 = lo2 = hi2 = 0
         for a in range(a0, a1):
             while a >= row_end:
                 r += 1
                 row_end = cell_start[(r + 1) * ncx]
-                top = cell_start[min(r + 2, ncy) * ncx]
+                lay = r // ncy
+                iy = r - lay * ncy
+                nxt = (lay + 1) * ncy
+                lo2 = n
+                hi2 = n
+                if not split:         # a's layer or the next (a periodic y wraps rows)
+                    hi1 = cell_start[min(nxt + ncy, rows) * ncx]
+                else:
+                    hi1 = cell_start[min(r + 2, nxt) * ncx]
+                    if lay + 1 < ncz:
+                        lo2 = cell_start[(nxt + max(iy - 1, 0)) * ncx]
+                        hi2 = cell_start[(nxt + min(iy + 2, ncy)) * ncx]
             k = nb_start[a]
             k1 = nb_start[a + 1]
             while k < k1 and nb_idx[k] < a:
@@ -272,10 +280,25 @@ def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start
             nb_mid[a] = k
             while k < k1:
                 b = nb_idx[k]
-                if b <= a or b >= top:
+                if b <= a or (b >= hi1 and (b < lo2 or b >= hi2)):
                     bad[ci] = True
                 k += 1
-    if bad.any():
+    return not bad.any()
+
+
+@njit(cache=True)
+def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start):
+    """Split the neighbour list for the half-list loops: ``nb_mid[a]`` is where the
+    neighbours b > a of particle a start in its list; the cell rows (``ncy`` rows of ``ncx``
+    cells) are grouped into about
+    ``bands`` bands of consecutive rows holding about as many particles each, and
+    ``band_start[i]`` is the first particle of band i (``band_start[nb]`` = n). Returns the
+    number of bands nb; 0 unless, as the cell walk of particles sorted by cell makes them,
+    every list holds its b < a before its b > a and every b > a lies in a's cell row or the
+    next (so in a's band or the next): the loops then gather over the full lists
+    (``half_starts``)."""
+    n = nb_start.shape[0] - 1
+    if not half_starts(nb_start, nb_idx, cell_start, ncx, 1, ncy, False, nb_mid):
         return 0
     target = max(n // max(bands, 1), 1)
     nb = 0
@@ -285,4 +308,113 @@ def half_lists(nb_start, nb_idx, cell_start, ncx, ncy, bands, nb_mid, band_start
         if first - band_start[nb] >= target or r == ncy:
             nb += 1
             band_start[nb] = first
+    return nb
+
+
+#: the colours of the 3-D half-list blocks: (parity of the slab of layers, parity of the
+#: block of rows within it)
+BLOCK_COLOURS = 4
+
+
+@njit(cache=True)
+def deal_blocks(half, n, threads, nb_start):
+    """``deal_bands`` for the 3-D layout of ``half_blocks``, [nb_mid (n) | block starts
+    (nb + 1) | the dealt order (nb) | colour starts (5) | nb], balanced by work: prange hands
+    thread t a contiguous share of a colour's segment (the first shares one longer where they
+    do not divide evenly), so each colour's blocks, largest first, go to the share with the
+    least work (a block's listed pairs b > a, plus one per particle) that has room left, and
+    the segment lists share after share. The blocks of a colour write disjoint particles, so
+    the order changes no sum."""
+    nb = int(half[half.shape[0] - 1])
+    k0 = n + nb + 1
+    cs = k0 + nb
+    t_count = max(threads, 1)
+    work = np.zeros(nb, dtype=np.int64)
+    for b in range(nb):
+        for a in range(int(half[n + b]), int(half[n + b + 1])):
+            work[b] += nb_start[a + 1] - half[a] + 1
+    load = np.zeros(t_count, dtype=np.int64)
+    room = np.zeros(t_count, dtype=np.int64)
+    owner = np.zeros(nb, dtype=np.int64)
+    for colour in range(BLOCK_COLOURS):
+        c0 = int(half[cs + colour])
+        c1 = int(half[cs + colour + 1])
+        m = c1 - c0
+        seg = np.sort(half[k0 + c0:k0 + c1].astype(np.int64))
+        for t in range(t_count):
+            load[t] = 0
+            room[t] = m // t_count + (1 if t < m % t_count else 0)
+        w = np.empty(m, dtype=np.int64)
+        for i in range(m):
+            w[i] = -work[seg[i]]
+        for i in np.argsort(w, kind="mergesort"):
+            best = -1
+            for t in range(t_count):
+                if room[t] > 0 and (best < 0 or load[t] < load[best]):
+                    best = t
+            owner[seg[i]] = best
+            load[best] += work[seg[i]]
+            room[best] -= 1
+        k = k0 + c0
+        for t in range(t_count):
+            for i in range(m):
+                if owner[seg[i]] == t:
+                    half[k] = seg[i]
+                    k += 1
+
+
+@njit(cache=True)
+def half_blocks(nb_start, nb_idx, cell_start, ncx, ncy, ncz, split, blocks, nb_mid, half):
+    """The half lists of a 3-D list in blocks of rows: ``nb_mid[a]`` as in ``half_lists``;
+    the layers of cells (one z, ``ncy`` rows of ``ncx`` cells each) are grouped into slabs of
+    consecutive layers holding about n / ``blocks`` particles or more, and a slab of one layer
+    is cut (``split``: y is not periodic) into blocks of at least two rows of about that many
+    particles. The cell walk lists a particle's b > a in its row or the next of its layer and
+    in the three rows around its own in the next layer, so a block writes its own particles,
+    the next block's first row and the next slab: the blocks of one colour, 2 (slab parity)
+    + (block parity within its slab), write disjoint particles. ``half`` receives [block
+    starts (nb + 1) | the order, by colour (nb) | colour starts (5)], the order not yet dealt.
+    Returns nb; 0 unless every listed b > a lies where the walk puts it (then the loops
+    gather over the full lists)."""
+    n = nb_start.shape[0] - 1
+    rows = ncy * ncz
+    if not half_starts(nb_start, nb_idx, cell_start, ncx, ncy, ncz, split, nb_mid):
+        return 0
+    target = max(n // max(blocks, 1), 1)
+    colour = np.empty(rows + 1, dtype=np.int64)
+    nb = 0
+    half[0] = 0
+    slab = 0
+    first = 0                         # the first layer of the open slab
+    for lay in range(ncz):
+        end = cell_start[(lay + 1) * ncy * ncx]
+        if end - half[nb] < target and lay < ncz - 1:
+            continue                  # the slab takes the next layer too
+        if split and lay == first and ncy >= 4:
+            j = 0
+            r0 = lay * ncy            # the open block's first row
+            for r in range(lay * ncy + 1, (lay + 1) * ncy):
+                at = cell_start[r * ncx]
+                if at - half[nb] >= target and r - r0 >= 2 and (lay + 1) * ncy - r >= 2:
+                    colour[nb] = 2 * (slab % 2) + j % 2
+                    nb += 1
+                    half[nb] = at
+                    j += 1
+                    r0 = r
+            colour[nb] = 2 * (slab % 2) + j % 2
+        else:
+            colour[nb] = 2 * (slab % 2)
+        nb += 1
+        half[nb] = end
+        slab += 1
+        first = lay + 1
+    k = nb + 1
+    cs = k + nb
+    for c in range(BLOCK_COLOURS):
+        half[cs + c] = k - (nb + 1)
+        for i in range(nb):
+            if colour[i] == c:
+                half[k] = i
+                k += 1
+    half[cs + BLOCK_COLOURS] = nb
     return nb

@@ -13,7 +13,8 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from sphfoam.engine.neighbours import deal_bands, half_lists
+from sphfoam.engine.neighbours import (BLOCK_COLOURS, deal_bands, deal_blocks, half_blocks,
+                                       half_lists)
 from sphfoam.engine.plan import Selection
 
 #: bands of cell rows of the half-list loops (about equal particle counts, but never less than
@@ -22,7 +23,10 @@ from sphfoam.engine.plan import Selection
 #: bands, so they are listed dealt in turn (``deal_bands``: thread t's share holds the
 #: colour's bands t, t + T, ...), not in row order, which gave the bed's rows to one thread
 #: and the rows above the water to the other; a fixed number (not one per thread) keeps
-#: every sum's order, and so the results, the same whatever the thread count
+#: every sum's order, and so the results, the same whatever the thread count. In 3-D the
+#: bands are slabs of layers of cells, and a layer's band is cut into blocks of rows in four
+#: colours, dealt by work (``half_blocks``, ``deal_blocks``): a shallow flow's few layers of
+#: water still give each thread its share
 HALF_BANDS = 64
 
 #: the fixed scalar slots every pipeline reads from ``prm`` before the models' own (2-D)
@@ -100,9 +104,14 @@ class Pipeline:
         self.module.fill_neighbours(*args, start, idx)
         return start, idx
 
-    def deal_bands(self, half, threads: int):
-        """Deal the bands of ``half`` to ``threads`` threads anew (``deal_bands``)."""
-        deal_bands(half, half.shape[0] - 2 * int(half[-1]) - 2, threads)
+    def deal_bands(self, half, threads: int, nb_start):
+        """Deal the bands of ``half`` to ``threads`` threads anew (``deal_bands``;
+        ``deal_blocks`` in 3-D, by the work of the list ``nb_start``)."""
+        if self.selection.dim == 3:
+            deal_blocks(half, half.shape[0] - 2 * int(half[-1]) - 2 - BLOCK_COLOURS, threads,
+                        nb_start)
+        else:
+            deal_bands(half, half.shape[0] - 2 * int(half[-1]) - 2, threads)
 
     def half_lists(self, nb_start, nb_idx, cells, half=None):
         """The array ``half`` of the half-list loops ``rates_half``/``density_half``: where
@@ -117,23 +126,31 @@ class Pipeline:
         if self.rates_half is None and self.density_half is None:
             return None
         n = nb_start.shape[0] - 1
-        # the rows of the bands: cell rows along x in 2-D, layers of cells (one z) in 3-D
-        row, rows = (cells.ncx, cells.ncy) if cells.dim == 2 else \
-            (cells.ncx * cells.ncy, cells.ncz)
-        size = n + 2 * rows + 2
+        # the bands: cell rows along x in 2-D; in 3-D blocks of rows within layers of cells
+        rows = cells.ncy if cells.dim == 2 else cells.ncy * cells.ncz
+        extra = 0 if cells.dim == 2 else BLOCK_COLOURS
+        size = n + 2 * rows + 2 + extra
         if nb_start[-1] >= 2 ** 32:
             return None
         if half is None or half.base is None or half.base.shape[0] != size:
             buf = np.empty(size, dtype=np.uint32)
         else:
             buf = half.base
-        nb = half_lists(nb_start, nb_idx, cells.cell_start, row, rows,
-                        HALF_BANDS, buf[:n], buf[n:n + rows + 1])
+        if cells.dim == 2:
+            nb = half_lists(nb_start, nb_idx, cells.cell_start, cells.ncx, rows,
+                            HALF_BANDS, buf[:n], buf[n:n + rows + 1])
+        else:
+            nb = half_blocks(nb_start, nb_idx, cells.cell_start, cells.ncx, cells.ncy,
+                             cells.ncz, not self.selection.periodic("y"), HALF_BANDS,
+                             buf[:n], buf[n:])
         if not nb:
             return None
-        half = buf[:n + 2 * nb + 2]
+        half = buf[:n + 2 * nb + 2 + extra]
         half[-1] = nb
-        deal_bands(half, n, numba.get_num_threads())
+        if cells.dim == 2:
+            deal_bands(half, n, numba.get_num_threads())
+        else:
+            deal_blocks(half, n, numba.get_num_threads(), nb_start)
         return half
 
     @property

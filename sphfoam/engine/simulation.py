@@ -297,7 +297,7 @@ class Simulation:
         (``neighbours.deal_bands``: dealt again when the thread count changed)."""
         threads = numba.get_num_threads()
         if threads != self._half_threads:
-            self.pipeline.deal_bands(self._half, threads)
+            self.pipeline.deal_bands(self._half, threads, self._nb[0])
             self._half_threads = threads
         return self._half
 
