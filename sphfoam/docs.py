@@ -83,7 +83,8 @@ FALLBACK_DESCRIPTIONS: dict[str, dict[str, str]] = {
         "walls": "named wall regions: rows of fixed wall particles",
     },
     "BoxRegion": {
-        "type": "a rectangle",
+        "type": "a rectangle (a box in 3-D); a side that is not a whole number of dx holds "
+                "round(L/dx) particles spaced L/n, filled to its faces",
         "min": "lower-left corner",
         "max": "upper-right corner",
     },
@@ -92,7 +93,9 @@ FALLBACK_DESCRIPTIONS: dict[str, dict[str, str]] = {
         "points": "corners in order (at least 3)",
     },
     "BoxWalls": {
-        "type": "a rectangular tank",
+        "type": "a rectangular tank (a box in 3-D); its rows lie dx/2, 3dx/2, ... behind "
+                "every closed side, spaced along a side that is not a whole number of dx as "
+                "a fluid box is",
         "min": "lower-left inner corner; wall rows lie outside `min`..`max`",
         "max": "upper-right inner corner",
         "layers": "rows of wall particles",

@@ -622,3 +622,49 @@ def test_3d_wall_geometry_of_a_tank_and_a_block_on_its_floor(tmp_path):
     nfull = st.extra["nFull"][w]
     assert (nfull[floor] == np.sum(inside & (off[:, 2] >= 1))).all()
     assert (nfull[edge] == np.sum(inside & (off[:, 2] >= 1) & (off[:, 0] >= 1))).all()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_tank_and_a_box_off_the_lattice_are_filled_to_their_faces(tmp_path, dim):
+    """A tank and a box of water whose sides are not whole numbers of dx (SPHERIC's MARIN
+    reservoir, 1.228 m at dx = 0.55/30, is 66.98 spacings): the water holds the box's volume
+    (sum of m/rho) and reaches each face within half its spacing, and every closed side of
+    the tank has its `layers` layers dx/2, 3dx/2, ... behind it (the lattice anchored at the
+    corner put the far sides' first layer 0.84 dx behind and dropped the third)."""
+    from sphfoam.setup.initial import generate_case
+
+    case = _copy(tmp_path)
+    dx, lo, hi, tank = 0.02, (0.0, 0.0, 0.0), (0.331, 0.209, 0.157), (0.431, 0.209, 0.4)
+    if dim == 2:
+        _edit(case / "constant" / "g", r"\(0 0 -9.81\)", "(0 -9.81)")
+        v = lambda p: "(%g %g)" % (p[0], p[2])          # noqa: E731 (x, z) in 2-D
+        body = f"dx {dx};\n"
+    else:
+        v = lambda p: "(%g %g %g)" % p                  # noqa: E731
+        body = f"dimension 3; dx {dx};\n"
+    _particle_dict(case, body + f"""
+fluid {{ water {{ type box; min {v(lo)}; max {v(hi)}; }} }}
+walls {{ tank {{ type box; min {v(lo)}; max {v(tank)}; layers 3; open top; }} }}
+""")
+    st = generate_case(Case(case))
+    axes = [0, 2] if dim == 2 else [0, 1, 2]
+    pos = np.column_stack(st.positions)
+    fluid = st.kind == 0
+    volume = np.prod([hi[a] - lo[a] for a in axes])
+    assert (st.m[fluid] / st.rho[fluid]).sum() == pytest.approx(volume, rel=1e-12)
+    for k, a in enumerate(axes):
+        f = pos[fluid, k]
+        n = round((hi[a] - lo[a]) / dx)
+        s = (hi[a] - lo[a]) / n
+        assert abs(s - dx) <= dx / (2 * n)
+        assert f.min() == pytest.approx(lo[a] + s / 2) and f.max() == pytest.approx(hi[a] - s / 2)
+        # the tank's layers behind its closed faces, along this axis, away from the edges
+        mid = np.ones(len(pos), bool)
+        for kk, aa in enumerate(axes):
+            if aa != a:
+                mid &= (pos[:, kk] > lo[aa] + 0.05) & (pos[:, kk] < 0.15)
+        walls = pos[mid & ~fluid, k]
+        ends = [lo[a]] if a == 2 else [lo[a], tank[a]]   # the top is open
+        for end in ends:
+            depth = np.sort(np.abs(walls[np.abs(walls - end) < 4 * dx] - end))
+            assert np.unique(np.round(depth / dx, 9)).tolist() == [0.5, 1.5, 2.5], (a, end)

@@ -10,7 +10,7 @@ from sphfoam.case.case import Case
 from sphfoam.engine.state import ParticleState
 from sphfoam.io.polymesh import write_foam_files
 from sphfoam.io.timedirs import case_lock, write_time
-from sphfoam.case.geometry import default_domain
+from sphfoam.case.geometry import default_domain, fitted_boxes
 from sphfoam.setup.particles import generate
 from sphfoam.setup.sanity import check_geometry
 
@@ -56,6 +56,8 @@ def write_start(case: Case, state: ParticleState, log) -> ParticleState:
     sim_p = case.models.sph["equationOfState"].pressure(state.rho, case.context)
     write_time(case, state, 0.0, 0, case.control.deltaT, p=sim_p)
     write_foam_files(case.path, *default_domain(case.particles), case.particles.dx)
+    for note in fitted_boxes(case.particles, waves=bool(case.waves)):
+        log(f"setup: {note}")
     log(f"setup: {state.n_fluid} fluid + {state.n - state.n_fluid} wall particles "
         f"(dx = {case.particles.dx:g} m) written to {case.path / '0'}")
     return state

@@ -6,6 +6,8 @@ Wall particles sit at the centres of the lattice cells *behind* the wall line, `
 rows deep, so the first wall row is dx/2 behind the wall and dx from the first fluid row.
 The initial state is hydrostatic: p = rho0 g_down (eta - y) with g_down = -g_y and eta the
 local free surface above each particle, and rho from the inverse of the equation of state. Masses are rho dx^2.
+A box of fluid or a tank whose sides are not whole numbers of dx is fitted to its faces
+(sphfoam.case.geometry.fitted_sites), masses rho times the cell's area.
 """
 
 from __future__ import annotations
@@ -17,8 +19,8 @@ from scipy.spatial import cKDTree
 from sphfoam.case.schemas import BlockWalls, BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models.mirror import line_distance, segment_array
-from sphfoam.case.geometry import (LATTICE_TOLERANCE, distance_to_walls, fluid_side,
-                                   lattice_count, lattice_offsets,
+from sphfoam.case.geometry import (LATTICE_TOLERANCE, distance_to_walls, fitted_sites,
+                                   fluid_side, lattice_count, lattice_offsets, whole_spacings,
                                    polylines_of, segments_of, wall_metadata)
 from sphfoam.setup.waves import fields as wave_fields
 from sphfoam.setup.waves import surface as wave_surface
@@ -57,12 +59,28 @@ def _rotated_lattice(lo, hi, dx, origin, angle):
     return x[inside], y[inside]
 
 
+def _fitted(lo, hi, dx) -> bool:
+    """Whether a box's sides are not all whole numbers of dx (sphfoam.setup.particles3d)."""
+    return not all(whole_spacings(b - a, dx) for a, b in zip(lo, hi))
+
+
+def _fitted_box(lo, hi, dx):
+    """Cell centres filling a box whose sides are not whole numbers of dx to its faces
+    (sphfoam.case.geometry.fitted_sites), and their spacing across x and along y."""
+    (xs, sx), (ys, sy) = (fitted_sites(a, b, dx) for a, b in zip(lo, hi))
+    X, Y = np.meshgrid(xs, ys)
+    return X.ravel(), Y.ravel(), sx, sy
+
+
 def fluid_points(region, dx):
     """Particles of a fluid region: the cell centres of its lattice (the usual grid anchored
-    at its lower-left corner, or its ``grid``) inside it."""
+    at its lower-left corner, or its ``grid``) inside it; a box whose sides are not whole
+    numbers of dx is filled to its faces (``_fitted_box``, see ``generate``)."""
     grid = getattr(region, "grid", None)
     if isinstance(region, BoxRegion):
         if grid is None:
+            if _fitted(region.min, region.max, dx):
+                return _fitted_box(region.min, region.max, dx)[:2]
             return _lattice(region.min, region.max, dx)
         return _rotated_lattice(region.min, region.max, dx, grid.origin, grid.angle)
     pts = np.asarray(region.points, dtype=float)
@@ -92,14 +110,45 @@ def seam_keep(x, y, region, r):
     return keep
 
 
-def wall_points(region, dx):
-    """Rows of wall particles behind a wall entry (``layers`` deep, cell centred)."""
+def _tank_sites(tank, dx):
+    """Sites of a tank whose sides are not whole numbers of dx: its rows ``layers`` deep,
+    dx/2, 3dx/2, ... behind every closed side, and along each side the sites that fill it
+    (``fitted_sites``; the lattice anchored at the corner put the far sides' first row less
+    than dx behind them and dropped the last), with each site's area."""
+    axes, spacing = [], []
+    for k, ((a, b), ends) in enumerate(zip(zip(tank.min, tank.max),
+                                           (("left", "right"), ("bottom", "top")))):
+        inner, s = fitted_sites(a, b, dx)
+        n0 = 0 if ends[0] in tank.open else tank.layers
+        n1 = 0 if ends[1] in tank.open else tank.layers
+        axes.append(np.concatenate([a - dx * (np.arange(n0)[::-1] + 0.5), inner,
+                                    b + dx * (np.arange(n1) + 0.5)]))
+        spacing.append(np.concatenate([np.full(n0, dx), np.full(inner.size, s),
+                                       np.full(n1, dx)]))
+    X, Y = np.meshgrid(*axes)
+    SX, SY = np.meshgrid(*spacing)
+    return X.ravel(), Y.ravel(), (SX * SY).ravel()
+
+
+def wall_points(region, dx, areas: bool = False):
+    """Rows of wall particles behind a wall entry (``layers`` deep, cell centred). With
+    ``areas``, also each particle's area, or None where it is dx^2."""
+    if areas:
+        x, y = wall_points(region, dx)
+        if isinstance(region, BoxWalls) and _fitted(region.min, region.max, dx):
+            xs, ys, a = _tank_sites(region, dx)
+            (x0, y0), (x1, y1) = region.min, region.max
+            return x, y, a[~((xs > x0) & (xs < x1) & (ys > y0) & (ys < y1))]
+        return x, y, None
     if isinstance(region, BoxWalls):
         L = region.layers * dx
         (x0, y0), (x1, y1) = region.min, region.max
         lo = (x0 - (0 if "left" in region.open else L), y0 - (0 if "bottom" in region.open else L))
         hi = (x1 + (0 if "right" in region.open else L), y1 + (0 if "top" in region.open else L))
-        x, y = _lattice(lo, hi, dx)
+        if _fitted(region.min, region.max, dx):
+            x, y = _tank_sites(region, dx)[:2]
+        else:
+            x, y = _lattice(lo, hi, dx)
         inside = (x > x0) & (x < x1) & (y > y0) & (y < y1)
         return x[~inside], y[~inside]
     xs, ys = [], []
@@ -167,16 +216,21 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
     placement = getattr(boundary, "wall_placement", "rows")
     segs = segments_of(pd)
     gmag = float(np.hypot(*ctx.g))
-    pieces = []
+    pieces, areas = [], []
     for name, r in pd.fluid.items():
         if waves and isinstance(r, BoxRegion) and r.grid is not None:
             from sphfoam.case.errors import CaseError
             raise CaseError.single("system/particleDict", f"fluid.{name}.grid", (
                 "a box carrying the initial waves of constant/waveProperties is filled column "
                 "by column on the usual grid: remove its grid (or the waves)"))
+        area = np.nan                     # NaN: the area is dx dy, the mass as before
         if waves and isinstance(r, BoxRegion):
             x_, y_, dy_ = wave_columns(r, dx, waves, gmag)
             pieces.append((x_, y_, dy_, r))
+        elif isinstance(r, BoxRegion) and r.grid is None and _fitted(r.min, r.max, dx):
+            x_, y_, sx, sy = _fitted_box(r.min, r.max, dx)   # filled to its faces
+            pieces.append((x_, y_, np.full(x_.size, sy), None))
+            area = sx * sy
         else:
             x_, y_ = fluid_points(r, dx)
             pieces.append((x_, y_, np.full(x_.size, dx), None))
@@ -184,27 +238,31 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
             x_, y_, dy_, w_ = pieces[-1]
             ok = fluid_side(segs, x_, y_, dx)
             pieces[-1] = (x_[ok], y_[ok], dy_[ok], w_)
+        areas.append(np.full(pieces[-1][0].size, area))
     xf = np.concatenate([q[0] for q in pieces])
     yf = np.concatenate([q[1] for q in pieces])
     dyf = np.concatenate([q[2] for q in pieces])
+    af = np.concatenate(areas)
     regf = np.concatenate([np.full(q[0].size, i) for i, q in enumerate(pieces)])
     ok = seam_keep(xf, yf, regf, pd.minSpacing * dx)
-    xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
+    xf, yf, dyf, regf, af = xf[ok], yf[ok], dyf[ok], regf[ok], af[ok]
     walls = list(pd.walls.values())
     if walls and placement != "none":
         layers = getattr(boundary, "wall_layers", None)
         wall_pieces = [wall_points(r if layers is None else r.model_copy(update={"layers": layers}),
-                                   dx) for r in walls]
+                                   dx, areas=True) for r in walls]
         xw = np.concatenate([p[0] for p in wall_pieces])
         yw = np.concatenate([p[1] for p in wall_pieces])
+        aw = np.concatenate([np.full(len(p[0]), np.nan) if p[2] is None else p[2]
+                             for p in wall_pieces])
         pw = np.concatenate([np.full(len(p[0]), i) for i, p in enumerate(wall_pieces)])
         keep = _first_of_duplicates(xw, yw, 0.5 * dx)
-        xw, yw, pw = xw[keep], yw[keep], pw[keep]
+        xw, yw, pw, aw = xw[keep], yw[keep], pw[keep], aw[keep]
         vel = np.array([tuple(getattr(w, "velocity", (0.0, 0.0))) for w in walls],
                        float).reshape(len(walls), 2)
         uw, vw = vel[pw, 0], vel[pw, 1]
     else:
-        xw = yw = uw = vw = np.zeros(0)
+        xw = yw = uw = vw = aw = np.zeros(0)
         pw = np.zeros(0, dtype=np.int64)
     if xw.size and xf.size:
         # fluid never overlaps walls: drop fluid particles closer than dx/2 to a wall particle
@@ -213,13 +271,13 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
                                                          distance_upper_bound=0.5 * dx,
                                                          workers=-1)
         ok = d >= 0.5 * dx * (1 - LATTICE_TOLERANCE)
-        xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
+        xf, yf, dyf, regf, af = xf[ok], yf[ok], dyf[ok], regf[ok], af[ok]
     for r in walls:                       # nor inside a solid block (beyond its rows)
         if isinstance(r, BlockWalls) and xf.size:
             m = 0.5 * dx * (1 - LATTICE_TOLERANCE)
             ok = ~((xf > r.min[0] - m) & (xf < r.max[0] + m) & (yf > r.min[1] - m)
                    & (yf < r.max[1] + m))
-            xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
+            xf, yf, dyf, regf, af = xf[ok], yf[ok], dyf[ok], regf[ok], af[ok]
     if segs and xf.size:
         # ... or to a wall line (walls without particles, e.g. mirrored ghosts). A wave's
         # column (sphfoam.setup.waves.wave_columns) holds n = round((d + eta)/dx) particles
@@ -230,9 +288,11 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         # "breathed" by 8-9 % at the column's acoustic period (docs/low-dissipation.md).
         # Each particle keeps half its own spacing, min(dx, dy), from the wall lines instead
         # (the wall rows of particle boundaries lie dx/2 behind the line: no change there).
+        # (a fitted box's particles keep half their spacing across, area / dy)
+        sxf = np.where(np.isnan(af), dx, af / dyf)
         ok = (distance_to_walls(segs, xf, yf)
-              >= 0.5 * np.minimum(dx, dyf) * (1 - LATTICE_TOLERANCE))
-        xf, yf, dyf, regf = xf[ok], yf[ok], dyf[ok], regf[ok]
+              >= 0.5 * np.minimum(sxf, dyf) * (1 - LATTICE_TOLERANCE))
+        xf, yf, dyf, regf, af = xf[ok], yf[ok], dyf[ok], regf[ok], af[ok]
     if xf.size == 0:
         raise ValueError("system/particleDict: fluid regions produce no particles at this dx")
     gdown = max(-float(ctx.g[1]), 0.0)   # hydrostatic along -y only (a body force along x,
@@ -291,7 +351,11 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         extra["patch"] = np.concatenate([np.full(xf.size, -1.0), pw.astype(float)])
         extra["x0"] = x.copy()
         extra["y0"] = y.copy()
-    return ParticleState(x, y, u, v, rho, rho * dx * dy, kind, extra=extra)
+    mass = rho * dx * dy
+    area = np.concatenate([af, aw])
+    fit = ~np.isnan(area)
+    mass[fit] = rho[fit] * area[fit]     # fitted boxes and tanks: rho times the cell's area
+    return ParticleState(x, y, u, v, rho, mass, kind, extra=extra)
 
 
 def wall_pressure(pf, yf, yw, nearest, rho_g):

@@ -9,7 +9,10 @@ faces), DualSPHysics' layout of boundary particles. Fluid
 keeps dx/2 from every wall particle and from every solid's surface. The initial state is
 hydrostatic: p = rho0 g_down (eta - z), eta the top of each (x, y) column plus dx/2 (wall
 particles: their nearest fluid particle's), rho from the inverse of the equation of state;
-masses rho dx^3. Solitary waves (``constant/waveProperties``) on a box of still water are
+masses rho dx^3. A box of fluid or a tank whose sides are not whole numbers of dx is fitted
+to its faces (sphfoam.case.geometry.fitted_sites: round(L/dx) sites spaced L/n along such a
+side; a tank's layers dx/2, 3dx/2, ... behind every closed side), masses rho times the
+cell's volume. Solitary waves (``constant/waveProperties``) on a box of still water are
 the 2-D flume's columns (sphfoam.setup.waves) in the x-z plane, repeated across y.
 """
 
@@ -19,7 +22,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sphfoam.case.errors import CaseError
-from sphfoam.case.geometry import LATTICE_TOLERANCE, lattice_count, lattice_offsets
+from sphfoam.case.geometry import (LATTICE_TOLERANCE, fitted_sites, lattice_count,
+                                   lattice_offsets, whole_spacings)
 from sphfoam.case.schemas import BlockWalls, BoxRegion, BoxWalls, MeshWalls, ParticleDict
 from sphfoam.case.solids import FACE_AXES, bounds, signed_distance, tank_wall_depth
 from sphfoam.engine.state import FLUID, WALL, ParticleState
@@ -57,25 +61,71 @@ def case_anchor(pd: ParticleDict) -> np.ndarray:
     return np.zeros(3)
 
 
-def fluid_points(region, dx, anchor) -> np.ndarray:
-    """Lattice centres inside a fluid region (a box on its own lattice, as in 2-D)."""
+def _grid(axes) -> np.ndarray:
+    X, Y, Z = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+
+
+def fitted(lo, hi, dx) -> bool:
+    """Whether a box's sides are not all whole numbers of dx: it is filled by
+    sphfoam.case.geometry.fitted_sites, its particles' volume the product of the spacings."""
+    return not all(whole_spacings(b - a, dx) for a, b in zip(lo, hi))
+
+
+def fluid_points(region, dx, anchor, volumes: bool = False):
+    """Lattice centres inside a fluid region (a box on its own lattice, as in 2-D; a box whose
+    sides are not whole numbers of dx filled to its faces, ``fitted_sites``). With
+    ``volumes``, also each particle's volume, or None where it is dx^3."""
     if isinstance(region, BoxRegion):
-        return lattice(region.min, region.max, dx)
+        if not fitted(region.min, region.max, dx):
+            p, vol = lattice(region.min, region.max, dx), None
+        else:
+            sites = [fitted_sites(a, b, dx) for a, b in zip(region.min, region.max)]
+            p = _grid([q for q, _ in sites])
+            vol = np.full(len(p), float(np.prod([s for _, s in sites])))
+        return (p, vol) if volumes else p
     lo, hi = bounds(region)
     p = lattice(lo - dx, hi + dx, dx, anchor)   # lattice() keeps whole cells: pad by one
-    return p[signed_distance(region, p) < 0.0]
+    p = p[signed_distance(region, p) < 0.0]
+    return (p, None) if volumes else p
 
 
-def wall_points(wall, dx, anchor) -> tuple[np.ndarray, np.ndarray]:
+def _tank_sites(lo, hi, dx, layers):
+    """Per axis, a tank's wall-layer sites ``layers`` deep behind both faces, dx apart, and
+    the sites between them that fill [lo, hi] (``fitted_sites``), with each site's spacing."""
+    axes, spacing = [], []
+    for a, b in zip(lo, hi):
+        inner, s = fitted_sites(a, b, dx)
+        k = np.arange(layers)
+        axes.append(np.concatenate([a - dx * (k[::-1] + 0.5), inner, b + dx * (k + 0.5)]))
+        spacing.append(np.concatenate([np.full(layers, dx), np.full(inner.size, s),
+                                       np.full(layers, dx)]))
+    return axes, spacing
+
+
+def wall_points(wall, dx, anchor, volumes: bool = False):
     """Wall particles of a wall entry ``layers`` deep and their distance behind the wall
-    surface."""
+    surface. A tank whose sides are not whole numbers of dx has its layers dx/2, 3dx/2, ...
+    behind every closed face and the sites along each face fitted to its length (the lattice
+    anchored at the tank's corner put the far faces' first layer less than dx behind them and
+    dropped the last). With ``volumes``, also each particle's volume, or None where it is
+    dx^3."""
     L = wall.layers * dx
     if isinstance(wall, BoxWalls):
         lo, hi = np.asarray(wall.min, float), np.asarray(wall.max, float)
-        p = lattice(lo - L, hi + L, dx, anchor=lo)
+        vol = None
+        if not fitted(lo, hi, dx):
+            p = lattice(lo - L, hi + L, dx, anchor=lo)
+        else:
+            axes, spacing = _tank_sites(lo, hi, dx, wall.layers)
+            p = _grid(axes)
+            vol = np.prod(_grid(spacing), axis=1)
         d = tank_wall_depth(wall, p)
         keep = (d > 0.0) & (d < np.inf)
-        return p[keep], d[keep]
+        p, d = p[keep], d[keep]
+        if vol is not None:
+            vol = vol[keep]
+        return (p, d, vol) if volumes else (p, d)
     lo, hi = bounds(wall)
     if isinstance(wall, MeshWalls):      # behind an open sheet, outside a container
         lo, hi = lo - L, hi + L
@@ -83,7 +133,7 @@ def wall_points(wall, dx, anchor) -> tuple[np.ndarray, np.ndarray]:
     p = lattice(lo - dx, hi + dx, dx, anchor)   # lattice() keeps whole cells: pad by one
     d = -signed_distance(wall, p)
     keep = (d > 0.0) & (d <= L * (1 + LATTICE_TOLERANCE))
-    return p[keep], d[keep]
+    return (p[keep], d[keep], None) if volumes else (p[keep], d[keep])
 
 
 def _first_of_duplicates(p: np.ndarray, r: float) -> np.ndarray:
@@ -238,56 +288,65 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
     tol = 1 - LATTICE_TOLERANCE
     anchor = case_anchor(pd)
     gmag = float(np.linalg.norm(ctx.g))
-    pieces, spacing, wave_box = [], [], []
+    pieces, spacing, wave_box, volume = [], [], [], []
     for name, r in pd.fluid.items():
         if waves and isinstance(r, BoxRegion):
             (x0, y0, z0), (x1, y1, z1) = r.min, r.max
             section = BoxRegion.model_construct(type="box", min=(x0, z0), max=(x1, z1),
                                                 grid=None, clipToWalls=False)
             xs, zs, dz = wave_columns(section, dx, waves, gmag)
-            ys = y0 + dx * (np.arange(lattice_count(y1 - y0, dx)) + 0.5)
+            ys, sy = fitted_sites(y0, y1, dx)      # across: filled to the faces
             p = np.column_stack([np.tile(xs, ys.size), np.repeat(ys, xs.size),
                                  np.tile(zs, ys.size)])
             pieces.append(p)
             spacing.append(np.tile(dz, ys.size))
             wave_box.append(r)
+            volume.append(None if sy == dx else dx * sy * np.tile(dz, ys.size))
         else:
-            p = fluid_points(r, dx, anchor)
+            p, vol = fluid_points(r, dx, anchor, volumes=True)
             pieces.append(p)
-            spacing.append(np.full(len(p), dx))
+            # a fitted box's spacing: its least (it keeps half of it from solids' surfaces)
+            spacing.append(np.full(len(p), dx if vol is None else
+                                   min(fitted_sites(a, b, dx)[1] for a, b in zip(r.min, r.max))))
             wave_box.append(None)
+            volume.append(vol)
     pf = np.concatenate(pieces)
     dzf = np.concatenate(spacing)
+    # each particle's volume where it is not dx dx dz (NaN: dx dx dz, the mass as before)
+    volf = np.concatenate([np.full(len(q), np.nan) if v is None else v
+                           for q, v in zip(pieces, volume)])
     regf = np.concatenate([np.full(len(q), i) for i, q in enumerate(pieces)])
     ok = seam_keep(pf, regf, pd.minSpacing * dx)
-    pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
+    pf, dzf, regf, volf = pf[ok], dzf[ok], regf[ok], volf[ok]
     walls = list(pd.walls.values())
     layers = getattr(boundary, "wall_layers", None)
     if walls and getattr(boundary, "wall_placement", "rows") != "none":
         made = [wall_points(w if layers is None else w.model_copy(update={"layers": layers}),
-                            dx, anchor) for w in walls]
+                            dx, anchor, volumes=True) for w in walls]
         pw = np.concatenate([m[0] for m in made])
         dw = np.concatenate([m[1] for m in made])
+        volw = np.concatenate([np.full(len(m[0]), np.nan) if m[2] is None else m[2]
+                               for m in made])
         patch = np.concatenate([np.full(len(m[0]), i) for i, m in enumerate(made)])
         keep = _first_of_duplicates(pw, 0.5 * dx)
-        pw, dw, patch = pw[keep], dw[keep], patch[keep]
+        pw, dw, patch, volw = pw[keep], dw[keep], patch[keep], volw[keep]
         vel = np.zeros((len(walls), 3))
         for i, w in enumerate(walls):          # a tank's constant velocity; solids are still
             v = tuple(getattr(w, "velocity", ()))
             vel[i, :len(v)] = v
         vel = vel[patch]
     else:
-        pw, dw, vel = np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3))
+        pw, dw, vel, volw = np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)), np.zeros(0)
         patch = np.zeros(0, dtype=np.int64)
     if len(pw) and len(pf):      # fluid never overlaps walls: dx/2 from every wall particle
         # only whether a wall particle is nearer than dx/2: a bounded search (inf beyond)
         d, _ = cKDTree(pw).query(pf, distance_upper_bound=0.5 * dx, workers=-1)
         ok = d >= 0.5 * dx * tol
-        pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
+        pf, dzf, regf, volf = pf[ok], dzf[ok], regf[ok], volf[ok]
     for w in walls:              # ... and from every solid's surface
         if not isinstance(w, BoxWalls) and len(pf):
             ok = signed_distance(w, pf) >= 0.5 * np.minimum(dx, dzf) * tol
-            pf, dzf, regf = pf[ok], dzf[ok], regf[ok]
+            pf, dzf, regf, volf = pf[ok], dzf[ok], regf[ok], volf[ok]
     if len(pf) == 0:
         raise ValueError(f"{PD}: fluid regions produce no particles at this dx")
     gdown = max(-float(ctx.g[2]), 0.0)      # hydrostatic along -z (z is up in 3-D)
@@ -326,5 +385,9 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
                                          patch.astype(float) if len(pw) else np.zeros(0)])
         for k, c in zip(("x0", "y0", "z0"), pos.T):
             extra[k] = c.copy()
+    mass = rho * dx * dx * dz
+    vol = np.concatenate([volf, volw])
+    fit = ~np.isnan(vol)
+    mass[fit] = rho[fit] * vol[fit]       # fitted boxes and tanks: rho times the cell's volume
     return ParticleState(pos[:, 0], pos[:, 1], vel_all[:, 0], vel_all[:, 1], rho,
-                         rho * dx * dx * dz, kind, extra=extra, z=pos[:, 2], w=vel_all[:, 2])
+                         mass, kind, extra=extra, z=pos[:, 2], w=vel_all[:, 2])
