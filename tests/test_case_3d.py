@@ -646,7 +646,12 @@ def test_a_tank_and_a_box_off_the_lattice_are_filled_to_their_faces(tmp_path, di
 fluid {{ water {{ type box; min {v(lo)}; max {v(hi)}; }} }}
 walls {{ tank {{ type box; min {v(lo)}; max {v(tank)}; layers 3; open top; }} }}
 """)
-    st = generate_case(Case(case))
+    c = Case(case)
+    st = generate_case(c)
+    from sphfoam.case.geometry import fitted_boxes
+    notes = fitted_boxes(c.particles)          # what `sphfoam setup` says it fitted
+    assert [n.split(" ")[0] for n in notes] == ["fluid.water", "walls.tank"]
+    assert ("17 x 10 x 8 particles" if dim == 3 else "17 x 8 particles") in notes[0]
     axes = [0, 2] if dim == 2 else [0, 1, 2]
     pos = np.column_stack(st.positions)
     fluid = st.kind == 0
