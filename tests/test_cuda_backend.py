@@ -124,6 +124,11 @@ HOOK_CASES = [
         "system/sphSchemes:integrator": {"type": "monaghan2007"},
         "constant/sphProperties:particleShifting": {
             "type": "deltaPlusShifting", "surfaceLambda": 0, "consistentContinuity": "yes"}}),
+    # DBC with the walls' density clamped at rho0 (a prepass term that sets rho, p and c of
+    # the wall particles in place, with no neighbour loop)
+    ("damBreakMatched", 0.2, 3, {
+        "constant/sphProperties:boundary": {"type": "stationaryGhosts", "noSlip": "no",
+                                            "clampDensity": "yes"}}),
     # Fourtakas et al.'s diffusion over the fluid alone (walls no): its pair term sees the
     # fluid and ghosts only
     ("damBreakMatched", 0.2, 3, {

@@ -306,9 +306,11 @@ class LoopBodies:
                          if self._code(t, part))
 
     def gather(self, terms: list, sigma: bool = False, cache: str | None = None) -> str:
-        """init, the neighbour loop and final of ``terms`` for one particle a."""
-        return "\n".join(x for x in (self.particle_code(terms, "init"),
-                                     self.pair_loop(terms, sigma, cache),
+        """init, the neighbour loop and final of ``terms`` for one particle a (no loop where
+        none but the on-demand ones, the kernel's, has pair code)."""
+        loop = self.pair_loop(terms, sigma, cache) if any(
+            self._code(t, "pair") for t in terms if not t.on_demand) else ""
+        return "\n".join(x for x in (self.particle_code(terms, "init"), loop,
                                      self.particle_code(terms, "final")) if x)
 
     def prepass_loops(self) -> list[str]:

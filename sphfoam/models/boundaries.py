@@ -99,12 +99,33 @@ class StationaryGhosts(Boundary):
     keeps_wall_velocity = True
 
     class Coeffs(_NoSlip):
-        pass
+        clampDensity: bool = Field(False, description=(
+            "yes: a wall particle's density is raised to rho0 wherever it falls below, before "
+            "every evaluation, so a wall never pulls water (p >= 0 on the walls: DualSPHysics' "
+            "DBC keeps its boundary particles at rho0 or above 'to prevent absorption of fluid "
+            "particles by boundaries'); no: the density as the continuity equation gives it, "
+            "negative pressures included"))
 
     def neighbour_kinds(self):
         """Every wall particle is wet: it enters every term as a fluid particle would (the
         viscous ones only no-slip), and its density evolves by the continuity equation."""
         return {"wetWall": "else", "viscousWetWall": self.coeffs.noSlip}
+
+    def terms(self):
+        """With ``clampDensity``: rho_w = max(rho_w, rho0), and then p_w = 0 and c_w = c0
+        (Tait's at rho0), before every evaluation."""
+        if not self.coeffs.clampDensity:
+            return []
+        return [Term("wallDensityFloor", ("prepass",), final=_DENSITY_FLOOR,
+                     applies=("wall",), sees=(), writes=("rho",), corrects=("p", "c"))]
+
+
+#: a wall particle below the reference density is set to it (Tait: p(rho0) = 0, c = c0)
+_DENSITY_FLOOR = """if rho[a] < eos_rho0:
+    rho[a] = eos_rho0
+    p[a] = 0.0
+    c[a] = eos_c0
+"""
 
 
 #: wall normal of neighbour b and the normal / tangential distances of a from it; a corner
