@@ -37,6 +37,26 @@ def whole_spacings(length: float, dx: float) -> bool:
     return abs(n - round(n)) <= LATTICE_TOLERANCE
 
 
+def off_lattice(lo, hi, dx: float) -> bool:
+    """Whether a box's sides are not all whole numbers of dx: the set-up fills it with
+    ``fitted_sites`` (a box of fluid) or ``tank_sites`` (a tank)."""
+    return not all(whole_spacings(b - a, dx) for a, b in zip(lo, hi))
+
+
+def tank_sites(lo, hi, dx: float, before, after) -> tuple[list, list]:
+    """Per axis k, a tank's sites and each site's spacing: ``before[k]`` wall layers dx/2,
+    3dx/2, ... below ``lo[k]``, the ``fitted_sites`` that fill [lo[k], hi[k]], and
+    ``after[k]`` layers above ``hi[k]``."""
+    axes, spacing = [], []
+    for a, b, n0, n1 in zip(lo, hi, before, after):
+        inner, s = fitted_sites(a, b, dx)
+        axes.append(np.concatenate([a - dx * (np.arange(n0)[::-1] + 0.5), inner,
+                                    b + dx * (np.arange(n1) + 0.5)]))
+        spacing.append(np.concatenate([np.full(n0, dx), np.full(inner.size, s),
+                                       np.full(n1, dx)]))
+    return axes, spacing
+
+
 def fitted_boxes(pd: ParticleDict, waves: bool = False) -> list[str]:
     """What the set-up fits (``fitted_sites``): each box of fluid and each tank whose sides
     are not all whole numbers of dx, with its particles' count and spacing per axis (a box
@@ -49,7 +69,7 @@ def fitted_boxes(pd: ParticleDict, waves: bool = False) -> list[str]:
         axes = range(len(r.min))
         if waves and kind == "fluid":
             axes = [1] if len(r.min) == 3 else []
-        if all(whole_spacings(r.max[a] - r.min[a], pd.dx) for a in axes):
+        if not off_lattice([r.min[a] for a in axes], [r.max[a] for a in axes], pd.dx):
             continue
         sites = [fitted_sites(r.min[a], r.max[a], pd.dx) for a in axes]
         what = "particles" if kind == "fluid" else "sites along its faces"

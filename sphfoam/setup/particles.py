@@ -20,7 +20,8 @@ from sphfoam.case.schemas import BlockWalls, BoxRegion, BoxWalls, ParticleDict
 from sphfoam.engine.state import FLUID, WALL, ParticleState
 from sphfoam.models.mirror import line_distance, segment_array
 from sphfoam.case.geometry import (LATTICE_TOLERANCE, distance_to_walls, fitted_sites,
-                                   fluid_side, lattice_count, lattice_offsets, whole_spacings,
+                                   fluid_side, lattice_count, lattice_offsets, off_lattice,
+                                   tank_sites,
                                    polylines_of, segments_of, wall_metadata)
 from sphfoam.setup.waves import fields as wave_fields
 from sphfoam.setup.waves import surface as wave_surface
@@ -59,11 +60,6 @@ def _rotated_lattice(lo, hi, dx, origin, angle):
     return x[inside], y[inside]
 
 
-def _fitted(lo, hi, dx) -> bool:
-    """Whether a box's sides are not all whole numbers of dx (sphfoam.setup.particles3d)."""
-    return not all(whole_spacings(b - a, dx) for a, b in zip(lo, hi))
-
-
 def _fitted_box(lo, hi, dx):
     """Cell centres filling a box whose sides are not whole numbers of dx to its faces
     (sphfoam.case.geometry.fitted_sites), and their spacing across x and along y."""
@@ -74,13 +70,11 @@ def _fitted_box(lo, hi, dx):
 
 def fluid_points(region, dx):
     """Particles of a fluid region: the cell centres of its lattice (the usual grid anchored
-    at its lower-left corner, or its ``grid``) inside it; a box whose sides are not whole
-    numbers of dx is filled to its faces (``_fitted_box``, see ``generate``)."""
+    at its lower-left corner, or its ``grid``) inside it (a box whose sides are not whole
+    numbers of dx: ``_fitted_box``, in ``generate``)."""
     grid = getattr(region, "grid", None)
     if isinstance(region, BoxRegion):
         if grid is None:
-            if _fitted(region.min, region.max, dx):
-                return _fitted_box(region.min, region.max, dx)[:2]
             return _lattice(region.min, region.max, dx)
         return _rotated_lattice(region.min, region.max, dx, grid.origin, grid.angle)
     pts = np.asarray(region.points, dtype=float)
@@ -111,20 +105,12 @@ def seam_keep(x, y, region, r):
 
 
 def _tank_sites(tank, dx):
-    """Sites of a tank whose sides are not whole numbers of dx: its rows ``layers`` deep,
-    dx/2, 3dx/2, ... behind every closed side, and along each side the sites that fill it
-    (``fitted_sites``; the lattice anchored at the corner put the far sides' first row less
-    than dx behind them and dropped the last), with each site's area."""
-    axes, spacing = [], []
-    for k, ((a, b), ends) in enumerate(zip(zip(tank.min, tank.max),
-                                           (("left", "right"), ("bottom", "top")))):
-        inner, s = fitted_sites(a, b, dx)
-        n0 = 0 if ends[0] in tank.open else tank.layers
-        n1 = 0 if ends[1] in tank.open else tank.layers
-        axes.append(np.concatenate([a - dx * (np.arange(n0)[::-1] + 0.5), inner,
-                                    b + dx * (np.arange(n1) + 0.5)]))
-        spacing.append(np.concatenate([np.full(n0, dx), np.full(inner.size, s),
-                                       np.full(n1, dx)]))
+    """Sites of a tank whose sides are not whole numbers of dx (``tank_sites``: its rows
+    ``layers`` deep behind every closed side; the lattice anchored at the corner put the far
+    sides' first row less than dx behind them and dropped the last), with each site's area."""
+    n = [[0 if end in tank.open else tank.layers for end in ends]
+         for ends in (("left", "right"), ("bottom", "top"))]
+    axes, spacing = tank_sites(tank.min, tank.max, dx, [n[0][0], n[1][0]], [n[0][1], n[1][1]])
     X, Y = np.meshgrid(*axes)
     SX, SY = np.meshgrid(*spacing)
     return X.ravel(), Y.ravel(), (SX * SY).ravel()
@@ -133,30 +119,27 @@ def _tank_sites(tank, dx):
 def wall_points(region, dx, areas: bool = False):
     """Rows of wall particles behind a wall entry (``layers`` deep, cell centred). With
     ``areas``, also each particle's area, or None where it is dx^2."""
-    if areas:
-        x, y = wall_points(region, dx)
-        if isinstance(region, BoxWalls) and _fitted(region.min, region.max, dx):
-            xs, ys, a = _tank_sites(region, dx)
-            (x0, y0), (x1, y1) = region.min, region.max
-            return x, y, a[~((xs > x0) & (xs < x1) & (ys > y0) & (ys < y1))]
-        return x, y, None
     if isinstance(region, BoxWalls):
         L = region.layers * dx
         (x0, y0), (x1, y1) = region.min, region.max
         lo = (x0 - (0 if "left" in region.open else L), y0 - (0 if "bottom" in region.open else L))
         hi = (x1 + (0 if "right" in region.open else L), y1 + (0 if "top" in region.open else L))
-        if _fitted(region.min, region.max, dx):
-            x, y = _tank_sites(region, dx)[:2]
+        a = None
+        if off_lattice(region.min, region.max, dx):
+            x, y, a = _tank_sites(region, dx)
         else:
             x, y = _lattice(lo, hi, dx)
-        inside = (x > x0) & (x < x1) & (y > y0) & (y < y1)
-        return x[~inside], y[~inside]
+        out = ~((x > x0) & (x < x1) & (y > y0) & (y < y1))
+        if not areas:
+            return x[out], y[out]
+        return x[out], y[out], None if a is None else a[out]
     xs, ys = [], []
     for pts, side in polylines_of(region):
         x, y = polyline_points(np.asarray(pts, float), dx, region.layers, side)
         xs.append(x)
         ys.append(y)
-    return np.concatenate(xs), np.concatenate(ys)
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    return (x, y, None) if areas else (x, y)
 
 
 def polyline_points(pts, dx, layers, side):
@@ -227,7 +210,7 @@ def generate(pd: ParticleDict, ctx, eos, boundary=None, support_radius: float | 
         if waves and isinstance(r, BoxRegion):
             x_, y_, dy_ = wave_columns(r, dx, waves, gmag)
             pieces.append((x_, y_, dy_, r))
-        elif isinstance(r, BoxRegion) and r.grid is None and _fitted(r.min, r.max, dx):
+        elif isinstance(r, BoxRegion) and r.grid is None and off_lattice(r.min, r.max, dx):
             x_, y_, sx, sy = _fitted_box(r.min, r.max, dx)   # filled to its faces
             pieces.append((x_, y_, np.full(x_.size, sy), None))
             area = sx * sy

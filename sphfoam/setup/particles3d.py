@@ -23,7 +23,7 @@ from scipy.spatial import cKDTree
 
 from sphfoam.case.errors import CaseError
 from sphfoam.case.geometry import (LATTICE_TOLERANCE, fitted_sites, lattice_count,
-                                   lattice_offsets, whole_spacings)
+                                   lattice_offsets, off_lattice, tank_sites)
 from sphfoam.case.schemas import BlockWalls, BoxRegion, BoxWalls, MeshWalls, ParticleDict
 from sphfoam.case.solids import FACE_AXES, bounds, signed_distance, tank_wall_depth
 from sphfoam.engine.state import FLUID, WALL, ParticleState
@@ -66,41 +66,24 @@ def _grid(axes) -> np.ndarray:
     return np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
 
 
-def fitted(lo, hi, dx) -> bool:
-    """Whether a box's sides are not all whole numbers of dx: it is filled by
-    sphfoam.case.geometry.fitted_sites, its particles' volume the product of the spacings."""
-    return not all(whole_spacings(b - a, dx) for a, b in zip(lo, hi))
-
-
 def fluid_points(region, dx, anchor, volumes: bool = False):
     """Lattice centres inside a fluid region (a box on its own lattice, as in 2-D; a box whose
     sides are not whole numbers of dx filled to its faces, ``fitted_sites``). With
-    ``volumes``, also each particle's volume, or None where it is dx^3."""
+    ``volumes``, also each particle's volume (None where it is dx^3) and the least spacing."""
+    vol, least = None, dx
     if isinstance(region, BoxRegion):
-        if not fitted(region.min, region.max, dx):
-            p, vol = lattice(region.min, region.max, dx), None
+        if not off_lattice(region.min, region.max, dx):
+            p = lattice(region.min, region.max, dx)
         else:
             sites = [fitted_sites(a, b, dx) for a, b in zip(region.min, region.max)]
             p = _grid([q for q, _ in sites])
             vol = np.full(len(p), float(np.prod([s for _, s in sites])))
-        return (p, vol) if volumes else p
-    lo, hi = bounds(region)
-    p = lattice(lo - dx, hi + dx, dx, anchor)   # lattice() keeps whole cells: pad by one
-    p = p[signed_distance(region, p) < 0.0]
-    return (p, None) if volumes else p
-
-
-def _tank_sites(lo, hi, dx, layers):
-    """Per axis, a tank's wall-layer sites ``layers`` deep behind both faces, dx apart, and
-    the sites between them that fill [lo, hi] (``fitted_sites``), with each site's spacing."""
-    axes, spacing = [], []
-    for a, b in zip(lo, hi):
-        inner, s = fitted_sites(a, b, dx)
-        k = np.arange(layers)
-        axes.append(np.concatenate([a - dx * (k[::-1] + 0.5), inner, b + dx * (k + 0.5)]))
-        spacing.append(np.concatenate([np.full(layers, dx), np.full(inner.size, s),
-                                       np.full(layers, dx)]))
-    return axes, spacing
+            least = min(s for _, s in sites)
+    else:
+        lo, hi = bounds(region)
+        p = lattice(lo - dx, hi + dx, dx, anchor)   # lattice() keeps whole cells: pad by one
+        p = p[signed_distance(region, p) < 0.0]
+    return (p, vol, least) if volumes else p
 
 
 def wall_points(wall, dx, anchor, volumes: bool = False):
@@ -114,10 +97,10 @@ def wall_points(wall, dx, anchor, volumes: bool = False):
     if isinstance(wall, BoxWalls):
         lo, hi = np.asarray(wall.min, float), np.asarray(wall.max, float)
         vol = None
-        if not fitted(lo, hi, dx):
+        if not off_lattice(lo, hi, dx):
             p = lattice(lo - L, hi + L, dx, anchor=lo)
-        else:
-            axes, spacing = _tank_sites(lo, hi, dx, wall.layers)
+        else:          # layers behind every side: tank_wall_depth drops the open ones
+            axes, spacing = tank_sites(lo, hi, dx, [wall.layers] * 3, [wall.layers] * 3)
             p = _grid(axes)
             vol = np.prod(_grid(spacing), axis=1)
         d = tank_wall_depth(wall, p)
@@ -303,11 +286,10 @@ def generate3d(pd: ParticleDict, ctx, eos, boundary=None, moving: bool = False, 
             wave_box.append(r)
             volume.append(None if sy == dx else dx * sy * np.tile(dz, ys.size))
         else:
-            p, vol = fluid_points(r, dx, anchor, volumes=True)
+            p, vol, least = fluid_points(r, dx, anchor, volumes=True)
             pieces.append(p)
-            # a fitted box's spacing: its least (it keeps half of it from solids' surfaces)
-            spacing.append(np.full(len(p), dx if vol is None else
-                                   min(fitted_sites(a, b, dx)[1] for a, b in zip(r.min, r.max))))
+            # a fitted box's least spacing (it keeps half of it from solids' surfaces)
+            spacing.append(np.full(len(p), least))
             wave_box.append(None)
             volume.append(vol)
     pf = np.concatenate(pieces)
