@@ -6,7 +6,7 @@ import string
 import time
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from sphfoam.case.foamdict import (
@@ -80,6 +80,10 @@ entry_values = st.recursive(
 
 @settings(max_examples=150, deadline=None)
 @given(dicts(entry_values))
+# a word after a list written over several lines, in a value with a dimension set: it was
+# written on a line of its own, which the parser reads as a missing ';'
+@example({"a0": None, "a": (DimensionSet((0, 0, 0, 0, 0, 0, 0)),
+                            [-10**9, -10**12, -10**19, 1.0000000000000002e16], "a")})
 def test_round_trip(d):
     text = dumps(d)
     assert_same(parse(text), d)

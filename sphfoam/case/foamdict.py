@@ -1087,8 +1087,10 @@ def _value_lines(v) -> list[str]:
         else:
             if current:
                 lines.append(" ".join(current))
-                current = []
-            lines.extend(r)
+            lines.extend(r[:-1])
+            # the next items go on after the closing line: a word on a line of its own
+            # after a dimension set reads as a missing ';' (the parser's check)
+            current = [r[-1]]
     if current:
         lines.append(" ".join(current))
     return lines
