@@ -570,18 +570,29 @@ walls
 
 
 def test_3d_block_faces_off_the_lattice_keep_their_first_layer(tmp_path):
-    """A block whose faces are not on the particle lattice (SPHERIC Test 2's container
-    model: its outer rows 0.9 dx behind the front face and 0.5 dx behind the sides): every
-    particle of a face's first layer takes that face's normal, so the front-side edges are
-    edges (two normals), not side faces only (free-slip Adami walls mirror the normal
-    components; with the front's missing there, the water's approach was not mirrored)."""
+    """A block whose sides are not whole numbers of dx (SPHERIC Test 2's container model,
+    0.161 m = 4.39 dx at H/dx = 15: on a lattice anchored at its corner its outer rows lay
+    0.9 dx behind the front face) is filled to its faces: round(L/dx) sites spaced L/n
+    along each side, the first layer half a spacing behind every face, the particles'
+    volumes m/rho adding up to the block's. Every particle of a face's first layer takes
+    that face's normal, so the front-side edges are edges (two normals), not side faces
+    only (free-slip Adami walls mirror the normal components; with the front's missing
+    there, the water's approach was not mirrored)."""
+    from sphfoam.case.geometry import fitted_boxes
+
     dx = 0.05
-    _, st, w, pos, n = _hybrid_walls(tmp_path, dx, "min (0.4 0 0); max (0.6 0.6 0.2);",
+    c, st, w, pos, n = _hybrid_walls(tmp_path, dx, "min (0.4 0 0); max (0.6 0.6 0.2);",
                                      "min (0.1 0.2 0); max (0.27 0.4 0.15); layers 3;")
     block = (pos[:, 0] > 0.1) & (pos[:, 0] < 0.27) & (pos[:, 1] > 0.2) & (pos[:, 1] < 0.4) \
         & (pos[:, 2] > 0)
     front = block & np.isclose(pos[:, 0], pos[block, 0].max())
-    assert 0.27 - pos[front, 0].max() == pytest.approx(0.9 * dx)
+    sx = 0.17 / 3                                    # 3.4 dx: 3 sites
+    assert 0.27 - pos[front, 0].max() == pytest.approx(sx / 2)
+    assert pos[block, 0].min() - 0.1 == pytest.approx(sx / 2)
+    assert block.sum() == 3 * 4 * 3
+    assert (st.m[w][block] / st.rho[w][block]).sum() == pytest.approx(0.17 * 0.2 * 0.15)
+    assert any(note.startswith("walls.block ") and "3 x 4 x 3 sites" in note
+               for note in fitted_boxes(c.particles))
     assert front.sum() == 12 and (n[front][:, 0] == 1).all()
     edge = front & ((pos[:, 1] == pos[block, 1].min()) | (pos[:, 1] == pos[block, 1].max()))
     assert edge.sum() == 6 and (np.abs(n[edge][:, 1]) == 1).all()
@@ -591,7 +602,8 @@ def test_3d_block_faces_off_the_lattice_keep_their_first_layer(tmp_path):
 def test_3d_wall_geometry_of_a_tank_and_a_block_on_its_floor(tmp_path):
     """The set-up's 3-D wall normals for one row: a tank's faces, edges and vertices belong
     to one, two and three faces (the signs of their normals into the water); a block on the
-    floor has no bottom face (it stands on the tank); the hybrid wall's nFull counts the
+    floor has no bottom face (it stands on the tank), and the floor's rows under it lie
+    behind its feet (edges and corners of the water); the hybrid wall's nFull counts the
     lattice sites in the support in front of the faces (a quarter space on an edge)."""
     dx = 0.05
     c, st, w, pos, n = _hybrid_walls(tmp_path, dx, "min (0 0 0); max (0.6 0.6 0.2);",
@@ -615,6 +627,13 @@ def test_3d_wall_geometry_of_a_tank_and_a_block_on_its_floor(tmp_path):
     assert not (n[low][:, 2] < 0).any()                  # no face on the tank's floor
     side = block & np.isclose(pos[:, 0], 0.1 + h) & np.isclose(pos[:, 2], h)
     assert side.any() and (n[side][:, 0] == -1).all() and (n[side][:, 2] == 0).all()
+    # the floor's row under the block lies behind the block's feet, the water's concave
+    # edges and corners (here dx/2 from two of its faces: behind the vertical edge's foot)
+    under = (pos[:, :2] > 0.1).all(axis=1) & (pos[:, :2] < 0.2).all(axis=1) & \
+        np.isclose(pos[:, 2], -h)
+    assert under.sum() == 4
+    assert np.array_equal(n[under][:, :2], np.where(pos[under, :2] < 0.15, -1.0, 1.0))
+    assert (n[under][:, 2] == 1).all() and (corner[under] == 2).all()
     r = c.context.support / dx
     k = np.arange(-4, 5)
     off = np.stack(np.meshgrid(k, k, k, indexing="ij"), -1).reshape(-1, 3)

@@ -482,16 +482,16 @@ def test_a_block_on_the_bed_takes_the_normals_of_its_own_faces(tutorial):
     own = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])[np.argmin(d, axis=1)]
     assert np.allclose(n[blk], own)
     assert np.allclose(s["wallDist"][blk], d.min(axis=1))
+    # the bed's rows under the block lie behind its feet, the water's concave corners: each
+    # a corner particle whose normal points to the nearer foot (they took the bed's +y, so
+    # the water's approach to the block's face was not mirrored under it)
+    under = (s["type"] == WALL) & (P[:, 0] > x0) & (P[:, 0] < x1) & (P[:, 1] < y0)
+    assert under.sum() == 15 and (s["corner"][under] == 1).all()     # 5 columns, 3 rows
+    foot = np.where(P[under, 0] - x0 < x1 - P[under, 0], x0, x1)
+    r = np.column_stack([foot - P[under, 0], y0 - P[under, 1]])
+    assert np.allclose(n[under], r / np.linalg.norm(r, axis=1)[:, None])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "a known leak: since the reservoir and the tank are filled to their faces (the section's "
-    "1.228 m is 33.49 dx, its tank 87.8 dx), the surge's foremost particle rides the free-slip "
-    "bed 0.1 dx above the wall line, reaches the block's face at 0.55 s and slides into the "
-    "block under its lowest face particle (dx/2 up); it is thrown out at c0 at 0.708 s "
-    "(BlowUp). Not new: before that change the same section at dx = 0.0362, 0.0365, 0.0368 "
-    "and 0.0371 m had one particle inside the block's rows at a written time too; this dx "
-    "alone kept it out. Free-slip Adami walls leak at a block's foot"))
 def test_free_slip_adami_walls_keep_the_water_out_of_a_block(tutorial):
     """The section's surge (H/dx = 15) meets the block at 0.45 s: with free-slip Adami walls
     no fluid particle enters the block's rows of wall particles to 0.8 s (with the bed's

@@ -58,13 +58,15 @@ def tank_sites(lo, hi, dx: float, before, after) -> tuple[list, list]:
 
 
 def fitted_boxes(pd: ParticleDict, waves: bool = False) -> list[str]:
-    """What the set-up fits (``fitted_sites``): each box of fluid and each tank whose sides
-    are not all whole numbers of dx, with its particles' count and spacing per axis (a box
-    carrying waves is laid out in columns along x and up: only across is fitted in 3-D)."""
+    """What the set-up fits (``fitted_sites``): each box of fluid, each tank and each 3-D
+    block whose sides are not all whole numbers of dx, with its particles' count and spacing
+    per axis (a box carrying waves is laid out in columns along x and up: only across is
+    fitted in 3-D; a 2-D block's rows follow each face, sphfoam.setup.particles)."""
     notes = []
     entries = [("fluid", n, r) for n, r in pd.fluid.items()
                if isinstance(r, BoxRegion) and getattr(r, "grid", None) is None]
-    entries += [("walls", n, w) for n, w in pd.walls.items() if isinstance(w, BoxWalls)]
+    entries += [("walls", n, w) for n, w in pd.walls.items() if isinstance(w, BoxWalls)
+                or (isinstance(w, BlockWalls) and len(w.min) == 3)]
     for kind, name, r in entries:
         axes = range(len(r.min))
         if waves and kind == "fluid":
@@ -72,7 +74,8 @@ def fitted_boxes(pd: ParticleDict, waves: bool = False) -> list[str]:
         if not off_lattice([r.min[a] for a in axes], [r.max[a] for a in axes], pd.dx):
             continue
         sites = [fitted_sites(r.min[a], r.max[a], pd.dx) for a in axes]
-        what = "particles" if kind == "fluid" else "sites along its faces"
+        what = "particles" if kind == "fluid" else "sites along its faces" \
+            if isinstance(r, BoxWalls) else "sites"
         notes.append(f"{kind}.{name} is not a whole number of dx = {pd.dx:g} m along every "
                      f"side: {' x '.join(str(q.size) for q, _ in sites)} {what}, spaced "
                      f"({' '.join(f'{sp:.6g}' for _, sp in sites)}) m, filled to its faces")
@@ -246,6 +249,26 @@ def distance_to_walls(segs: list[Segment], x: np.ndarray, y: np.ndarray) -> np.n
     return _closest(segs, x, y)[0]
 
 
+def split_at_junctions(segs: list[Segment], tol: float) -> list[Segment]:
+    """The segments cut where another segment ends on their interior (a block standing on
+    the bed cuts the bed at its feet), so that the piece a block covers can be told from
+    the pieces the fluid reaches. Each piece keeps its segment's normal and patch."""
+    ends = [p for s in segs for p in (s.p0, s.p1)]
+    out: list[Segment] = []
+    for s in segs:
+        tx, ty = s.tangent
+        L = s.length
+        cuts: dict[float, tuple[float, float]] = {}
+        for q in ends:
+            t = (q[0] - s.p0[0]) * tx + (q[1] - s.p0[1]) * ty
+            off = abs((q[0] - s.p0[0]) * ty - (q[1] - s.p0[1]) * tx)
+            if tol < t < L - tol and off <= tol:
+                cuts.setdefault(round(t / tol), tuple(q))
+        pts = [s.p0] + [cuts[k] for k in sorted(cuts)] + [s.p1]
+        out += [Segment(a, b, s.normal, s.patch) for a, b in zip(pts[:-1], pts[1:])]
+    return out
+
+
 def vertex_normals(segs: list[Segment], tol: float) -> dict[tuple[float, float], tuple]:
     """Pseudo-normal (normalised sum of the adjacent normals) at every segment end, and
     whether the end is a corner (two segments meeting at an angle)."""
@@ -287,8 +310,13 @@ def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
     A wall particle takes the nearest segment it lies behind (on the solid side of its
     line) among the faces open to the fluid (``_exposed``): the rows of a block standing
     on the bed lie in front of the bed's line and behind the block's bottom face, which
-    the bed covers; neither is their wall."""
-    d, qx, qy, which, at_end = _closest(segs, x, y, _exposed(segs, dx), 1e-6 * dx)
+    the bed covers; neither is their wall. The bed is cut at the block's feet
+    (``split_at_junctions``) and the piece under the block is covered too: the bed's rows
+    under the block lie behind the corner the block's face makes with the bed, the fluid's
+    concave corner, as the rows behind a tank's corner do."""
+    segs = split_at_junctions(segs, 1e-6 * dx)
+    exposed = _exposed(segs, dx)
+    d, qx, qy, which, at_end = _closest(segs, x, y, exposed, 1e-6 * dx)
     none = which < 0                      # behind no exposed line: the nearest of all
     if none.any():
         d[none], qx[none], qy[none], which[none], at_end[none] = _closest(
@@ -296,7 +324,7 @@ def wall_metadata(segs: list[Segment], x: np.ndarray, y: np.ndarray, dx: float):
     nx = np.zeros(x.size)
     ny = np.zeros(x.size)
     corner = np.zeros(x.size)
-    vnorm = vertex_normals(segs, 1e-6 * dx)
+    vnorm = vertex_normals([s for s, e in zip(segs, exposed) if e], 1e-6 * dx)
     tol = 1e-6 * dx
     for k in range(x.size):
         s = segs[which[k]]

@@ -91,8 +91,8 @@ def wall_points(wall, dx, anchor, volumes: bool = False):
     surface. A tank whose sides are not whole numbers of dx has its layers dx/2, 3dx/2, ...
     behind every closed face and the sites along each face fitted to its length (the lattice
     anchored at the tank's corner put the far faces' first layer less than dx behind them and
-    dropped the last). With ``volumes``, also each particle's volume, or None where it is
-    dx^3."""
+    dropped the last); a block's, ``layers`` deep inside each face. With ``volumes``, also
+    each particle's volume, or None where it is dx^3."""
     L = wall.layers * dx
     if isinstance(wall, BoxWalls):
         lo, hi = np.asarray(wall.min, float), np.asarray(wall.max, float)
@@ -108,6 +108,19 @@ def wall_points(wall, dx, anchor, volumes: bool = False):
         p, d = p[keep], d[keep]
         if vol is not None:
             vol = vol[keep]
+        return (p, d, vol) if volumes else (p, d)
+    if isinstance(wall, BlockWalls) and off_lattice(wall.min, wall.max, dx):
+        # a block whose sides are not whole numbers of dx: its sites fitted to its faces,
+        # ``layers`` deep behind each (the lattice anchored at its corner put the far faces'
+        # first layer up to dx behind them)
+        sites = [fitted_sites(a, b, dx) for a, b in zip(wall.min, wall.max)]
+        index = np.stack(np.meshgrid(*[np.arange(q.size) for q, _ in sites],
+                                     indexing="ij"), -1).reshape(-1, 3)
+        n = np.array([q.size for q, _ in sites])
+        keep = ((index < wall.layers) | (index >= n - wall.layers)).any(axis=1)
+        p = _grid([q for q, _ in sites])[keep]
+        vol = np.full(len(p), float(np.prod([sp for _, sp in sites])))
+        d = -signed_distance(wall, p)
         return (p, d, vol) if volumes else (p, d)
     lo, hi = bounds(wall)
     if isinstance(wall, MeshWalls):      # behind an open sheet, outside a container
@@ -202,6 +215,36 @@ def _behind(w, p: np.ndarray) -> np.ndarray:
     return signed_distance(w, p) < 0.0
 
 
+def _out_of_blocks(walls, i: int, q: np.ndarray, dx: float) -> np.ndarray:
+    """From the points ``q`` of tank ``i``'s inside (the nearest to its wall particles), the
+    step out of any block standing on them to the nearest of the block's faces that the
+    fluid reaches: the floor's rows under a block lie behind the edge its face makes with
+    the floor (the fluid's concave edge), not under the floor's water."""
+    step = np.zeros_like(q)
+    tol = 1e-6 * dx
+    for k, w in enumerate(walls):
+        if k == i or not isinstance(w, BlockWalls):
+            continue
+        lo, hi = np.asarray(w.min, float), np.asarray(w.max, float)
+        on = np.all((q > lo - tol) & (q < hi + tol), axis=1)
+        if not on.any():
+            continue
+        depth = np.stack([q[on] - lo, hi - q[on]])                   # (2, n, 3)
+        for side, edge in ((0, lo), (1, hi)):
+            for axis in range(3):      # a face on another wall is no face
+                c = 0.5 * (lo + hi)
+                c[axis] = edge[axis] + (0.5 * dx if side else -0.5 * dx)
+                if any(_behind(o, c[None, :])[0] for j, o in enumerate(walls) if j != k):
+                    depth[side, :, axis] = np.inf
+        # to the nearest face, and to every face as near within dx/4 (behind the block's
+        # vertical edge at the floor: across the edge, as for the block's own rows)
+        least = depth.min(axis=(0, 2))
+        out = (depth <= least[None, :, None] + 0.25 * dx) & np.isfinite(depth) \
+            & (least[None, :, None] > tol)
+        step[on] += np.where(out[1], depth[1], 0.0) - np.where(out[0], depth[0], 0.0)
+    return step
+
+
 def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
                   support_radius: float | None = None) -> dict[str, np.ndarray]:
     """Per wall particle of box tanks and block solids (axis-aligned plane faces): per axis,
@@ -225,6 +268,7 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
         lo, hi = np.asarray(w.min, float), np.asarray(w.max, float)
         if isinstance(w, BoxWalls):
             into = np.clip(lo - p, 0.0, None) - np.clip(p - hi, 0.0, None)   # into the tank
+            into += _out_of_blocks(walls, i, p + into, dx)
             near = np.abs(into) > 0.25 * dx
             out = np.sign(into)
             ghost[sel] = 2.0 * into      # to the nearest point of the tank, and as far again
