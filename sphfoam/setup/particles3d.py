@@ -215,6 +215,22 @@ def _behind(w, p: np.ndarray) -> np.ndarray:
     return signed_distance(w, p) < 0.0
 
 
+def _covered_faces(walls, k: int, dx: float) -> np.ndarray:
+    """Block ``k``'s faces (side below/above, axis) that lie on another wall (a block
+    standing on the tank's floor): no face, the fluid cannot reach them. (2, 3): the faces
+    at ``min`` and at ``max`` along each axis."""
+    w = walls[k]
+    lo, hi = np.asarray(w.min, float), np.asarray(w.max, float)
+    covered = np.zeros((2, 3), bool)
+    for side, edge in ((0, lo), (1, hi)):
+        for axis in range(3):
+            c = 0.5 * (lo + hi)
+            c[axis] = edge[axis] + (0.5 * dx if side else -0.5 * dx)
+            covered[side, axis] = any(_behind(o, c[None, :])[0]
+                                      for j, o in enumerate(walls) if j != k)
+    return covered
+
+
 def _out_of_blocks(walls, i: int, q: np.ndarray, dx: float) -> np.ndarray:
     """From the points ``q`` of tank ``i``'s inside (the nearest to its wall particles), the
     step out of any block standing on them to the nearest of the block's faces that the
@@ -230,12 +246,7 @@ def _out_of_blocks(walls, i: int, q: np.ndarray, dx: float) -> np.ndarray:
         if not on.any():
             continue
         depth = np.stack([q[on] - lo, hi - q[on]])                   # (2, n, 3)
-        for side, edge in ((0, lo), (1, hi)):
-            for axis in range(3):      # a face on another wall is no face
-                c = 0.5 * (lo + hi)
-                c[axis] = edge[axis] + (0.5 * dx if side else -0.5 * dx)
-                if any(_behind(o, c[None, :])[0] for j, o in enumerate(walls) if j != k):
-                    depth[side, :, axis] = np.inf
+        depth = np.where(_covered_faces(walls, k, dx)[:, None, :], np.inf, depth)
         # to the nearest face, and to every face as near within dx/4 (behind the block's
         # vertical edge at the floor: across the edge, as for the block's own rows)
         least = depth.min(axis=(0, 2))
@@ -274,12 +285,7 @@ def wall_geometry(walls, pw: np.ndarray, patch: np.ndarray, dx: float,
             ghost[sel] = 2.0 * into      # to the nearest point of the tank, and as far again
         else:
             depth = np.stack([p - lo, hi - p])                 # (2, n, 3): below, above
-            for side, edge in ((0, lo), (1, hi)):
-                for axis in range(3):      # a face on another wall is no face
-                    c = 0.5 * (lo + hi)
-                    c[axis] = edge[axis] + (0.5 * dx if side else -0.5 * dx)
-                    if any(_behind(o, c[None, :])[0] for k, o in enumerate(walls) if k != i):
-                        depth[side, :, axis] = np.inf
+            depth = np.where(_covered_faces(walls, i, dx)[:, None, :], np.inf, depth)
             d = depth.min(axis=0)
             out = np.where(depth[1] < depth[0], 1.0, -1.0)
             # its nearest faces, and every face whose first layer it is in: a block's faces
