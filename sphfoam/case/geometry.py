@@ -253,17 +253,19 @@ def split_at_junctions(segs: list[Segment], tol: float) -> list[Segment]:
     """The segments cut where another segment ends on their interior (a block standing on
     the bed cuts the bed at its feet), so that the piece a block covers can be told from
     the pieces the fluid reaches. Each piece keeps its segment's normal and patch."""
-    ends = [p for s in segs for p in (s.p0, s.p1)]
+    ends = np.array([p for s in segs for p in (s.p0, s.p1)], float).reshape(-1, 2)
     out: list[Segment] = []
     for s in segs:
         tx, ty = s.tangent
-        L = s.length
-        cuts: dict[float, tuple[float, float]] = {}
-        for q in ends:
-            t = (q[0] - s.p0[0]) * tx + (q[1] - s.p0[1]) * ty
-            off = abs((q[0] - s.p0[0]) * ty - (q[1] - s.p0[1]) * tx)
-            if tol < t < L - tol and off <= tol:
-                cuts.setdefault(round(t / tol), tuple(q))
+        rx, ry = ends[:, 0] - s.p0[0], ends[:, 1] - s.p0[1]
+        t = rx * tx + ry * ty
+        on = (t > tol) & (t < s.length - tol) & (np.abs(rx * ty - ry * tx) <= tol)
+        if not on.any():
+            out.append(s)
+            continue
+        cuts: dict[int, tuple[float, float]] = {}
+        for k in np.flatnonzero(on):
+            cuts.setdefault(int(round(t[k] / tol)), (float(ends[k, 0]), float(ends[k, 1])))
         pts = [s.p0] + [cuts[k] for k in sorted(cuts)] + [s.p1]
         out += [Segment(a, b, s.normal, s.patch) for a, b in zip(pts[:-1], pts[1:])]
     return out
