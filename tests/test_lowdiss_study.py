@@ -104,7 +104,7 @@ def test_collision_study_clones_into_valid_cases(tmp_path):
 def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     """tutorials/solitaryCollision/studyDict.convergence: every run clones into a valid case
     measured against the potential flow's peak; the kernel-and-filter variants change only
-    the kernel and the density filter."""
+    the kernel and the density filter, the XSPH variant only XSPH."""
     base = _copy(tmp_path, "solitaryCollision")
     s = st.load(base / "studyDict.convergence")
     st.prepare(s)
@@ -119,6 +119,9 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     assert (kernel["defaultQ"], filt["defaultQ"]) == ("quartic", "mlsReinitialisation")
     assert (kernel["defaultNoMLS"], filt["defaultNoMLS"]) == ("gaussian", "none")
     assert (kernel["defaultQNoMLS"], filt["defaultQNoMLS"]) == ("quartic", "none")
+    xsph = {v: p.get("velocityCorrection", {}).get("type") for v, p in props.items()}
+    assert xsph["default"] == "xsph" and xsph["defaultNoXSPH"] == "none"
+    assert (kernel["defaultNoXSPH"], filt["defaultNoXSPH"]) == ("gaussian", "mlsReinitialisation")
 
 
 @pytest.mark.parametrize("case, dict_name", [
