@@ -4,24 +4,32 @@
     python onset.py RUN ...     (a folder holding force.dat[.gz] and sensors.dat[.gz], or a
                                  case with its postProcessing)
 """
-import sys, gzip, numpy as np
+import sys
 from pathlib import Path
-def load(p):
-    p=Path(p)
-    op = gzip.open if p.suffix==".gz" else open
-    with op(p,"rt") as f:
-        rows=[l.split() for l in f if not l.startswith("#") and l.strip()]
-    return np.array([[float(x) if x.lower()!="nan" else np.nan for x in r] for r in rows])
-for d in sys.argv[1:]:
-    d=Path(d)
-    fp = next(iter(list(d.glob("force.dat*"))+list(d.glob("postProcessing/boxForce/0/force.dat"))))
-    sp = next(iter(list(d.glob("sensors.dat*"))+list(d.glob("postProcessing/sensors/0/sensors.dat"))))
-    F=load(fp); S=load(sp)
-    t=F[:,0]; fx=np.abs(F[:,1]); i=np.flatnonzero(fx>1.0)
-    ts=S[:,0]; p1=S[:,1]; j=np.flatnonzero(np.nan_to_num(p1)>2000)
-    w=(ts<0.7); k=np.nanargmax(np.where(w,p1,np.nan)) if np.any(w&np.isfinite(p1)) else None
+
+import numpy as np
+
+
+def series(folder: Path, name: str, function: str) -> np.ndarray:
+    """The folder's ``name``.dat[.gz], or its case's postProcessing/``function``/0/``name``.dat."""
+    path = next(iter(sorted(folder.glob(f"{name}.dat*"))
+                     + [folder / "postProcessing" / function / "0" / f"{name}.dat"]))
+    return np.loadtxt(path)          # reads .gz and the sensors' nan as they are
+
+
+for arg in sys.argv[1:]:
+    d = Path(arg)
+    F, S = series(d, "force", "boxForce"), series(d, "sensors", "sensors")
+    t, ts, p1 = F[:, 0], S[:, 0], S[:, 1]
+    i = np.flatnonzero(np.abs(F[:, 1]) > 1.0)
+    j = np.flatnonzero(np.nan_to_num(p1) > 2000)
+    early = np.where(ts < 0.7, p1, np.nan)
     force = f"{t[i[0]]:.3f} s" if i.size else "never"
     onset = f"{ts[j[0]]:.3f} s" if j.size else "never"
-    peak = "no reading" if k is None else f"{p1[k] / 1000:.1f} kPa at {ts[k]:.3f} s"
-    print(f"{str(d):<40} force > 1 N at {force}, P1 > 2 kPa at {onset}, "
+    if np.isfinite(early).any():
+        k = np.nanargmax(early)
+        peak = f"{p1[k] / 1000:.1f} kPa at {ts[k]:.3f} s"
+    else:
+        peak = "no reading"
+    print(f"{arg:<40} force > 1 N at {force}, P1 > 2 kPa at {onset}, "
           f"P1's largest before 0.7 s {peak}")
