@@ -104,7 +104,8 @@ def test_collision_study_clones_into_valid_cases(tmp_path):
 def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     """tutorials/solitaryCollision/studyDict.convergence: every run clones into a valid case
     measured against the potential flow's peak; the kernel-and-filter variants change only
-    the kernel and the density filter, the XSPH variant only XSPH."""
+    the kernel and the density filter, the XSPH variant only XSPH, the density-diffusion
+    variants only the filter."""
     base = _copy(tmp_path, "solitaryCollision")
     s = st.load(base / "studyDict.convergence")
     st.prepare(s)
@@ -122,6 +123,17 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     xsph = {v: p.get("velocityCorrection", {}).get("type") for v, p in props.items()}
     assert xsph["default"] == "xsph" and xsph["defaultNoXSPH"] == "none"
     assert (kernel["defaultNoXSPH"], filt["defaultNoXSPH"]) == ("gaussian", "mlsReinitialisation")
+    # the density-diffusion variants replace the filter and nothing else; the stiffer
+    # filter-free one also doubles vmax
+    assert filt["defaultDelta"] == "fourtakasDeltaSPH" and filt["defaultAntuono"] == "antuonoDeltaSPH"
+    assert filt["defaultNoMLSC2"] == "none"
+    assert props["defaultNoMLSC2"]["equationOfState"]["vmax"] == 2 * props["default"]["equationOfState"]["vmax"]
+    for variant, changed in (("defaultDelta", {"densityFilter"}),
+                             ("defaultAntuono", {"densityFilter"}),
+                             ("defaultNoMLSC2", {"densityFilter", "equationOfState"})):
+        differ = {k for k in props["default"].keys() | props[variant].keys()
+                  if props["default"].get(k) != props[variant].get(k)}
+        assert differ == changed, (variant, differ)
 
 
 @pytest.mark.parametrize("case, dict_name", [
