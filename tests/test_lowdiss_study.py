@@ -105,7 +105,7 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     """tutorials/solitaryCollision/studyDict.convergence: every run clones into a valid case
     measured against the potential flow's peak; the kernel-and-filter variants change only
     the kernel and the density filter, the XSPH variant only XSPH, the density-diffusion
-    variants only the filter."""
+    variants only the filter (and the C-SPH variants add the kernel correction)."""
     base = _copy(tmp_path, "solitaryCollision")
     s = st.load(base / "studyDict.convergence")
     st.prepare(s)
@@ -128,9 +128,18 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     assert filt["defaultDelta"] == "fourtakasDeltaSPH" and filt["defaultAntuono"] == "antuonoDeltaSPH"
     assert filt["defaultNoMLSC2"] == "none"
     assert props["defaultNoMLSC2"]["equationOfState"]["vmax"] == 2 * props["default"]["equationOfState"]["vmax"]
+    delta = {v: p["densityFilter"].get("delta") for v, p in props.items()}
+    assert (delta["defaultDelta"], delta["defaultDelta007"], delta["defaultDelta005"]) == (0.1, 0.07, 0.05)
+    # the C-SPH variants add P's kernel correction, one to the default, one to defaultDelta
+    assert props["defaultCsph"]["kernelCorrection"]["type"] == "csph"
+    assert props["defaultDeltaCsph"]["densityFilter"] == props["defaultDelta"]["densityFilter"]
     for variant, changed in (("defaultDelta", {"densityFilter"}),
+                             ("defaultDelta007", {"densityFilter"}),
+                             ("defaultDelta005", {"densityFilter"}),
                              ("defaultAntuono", {"densityFilter"}),
-                             ("defaultNoMLSC2", {"densityFilter", "equationOfState"})):
+                             ("defaultNoMLSC2", {"densityFilter", "equationOfState"}),
+                             ("defaultCsph", {"kernelCorrection"}),
+                             ("defaultDeltaCsph", {"densityFilter", "kernelCorrection"})):
         differ = {k for k in props["default"].keys() | props[variant].keys()
                   if props["default"].get(k) != props[variant].get(k)}
         assert differ == changed, (variant, differ)
@@ -140,12 +149,15 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     ("solitaryWave", "studyDict.lowDissipation"),
     ("solitaryWave", "studyDict.lowDissipationScreen"),
     ("solitaryWallRunup", "studyDict.lowDissipation"),
+    ("solitaryCollision", "studyDict.convergence"),
 ])
 def test_the_commands_in_a_study_dictionarys_comments_name_its_runs(case, dict_name):
-    """Every ``--only NAME`` that a study dictionary's comments show names one of its runs."""
+    """Every ``--only NAME`` that a study dictionary's comments show names one of its runs
+    or variants (a variant selects all its resolutions)."""
     import re
 
     path = TUTORIALS / case / dict_name
-    names = {r.name for r in st.load(path).runs}
+    runs = st.load(path).runs
+    names = {r.name for r in runs} | {r.variant for r in runs}
     shown = re.findall(r"--only\s+(\S+)", path.read_text())
     assert set(shown) <= names, set(shown) - names
