@@ -133,13 +133,15 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     # the C-SPH variants add P's kernel correction, one to the default, one to defaultDelta
     assert props["defaultCsph"]["kernelCorrection"]["type"] == "csph"
     assert props["defaultDeltaCsph"]["densityFilter"] == props["defaultDelta"]["densityFilter"]
+    assert (kernel["defaultQDelta"], filt["defaultQDelta"]) == ("quartic", "fourtakasDeltaSPH")
     for variant, changed in (("defaultDelta", {"densityFilter"}),
                              ("defaultDelta007", {"densityFilter"}),
                              ("defaultDelta005", {"densityFilter"}),
                              ("defaultAntuono", {"densityFilter"}),
                              ("defaultNoMLSC2", {"densityFilter", "equationOfState"}),
                              ("defaultCsph", {"kernelCorrection"}),
-                             ("defaultDeltaCsph", {"densityFilter", "kernelCorrection"})):
+                             ("defaultDeltaCsph", {"densityFilter", "kernelCorrection"}),
+                             ("defaultQDelta", {"densityFilter", "kernel"})):
         differ = {k for k in props["default"].keys() | props[variant].keys()
                   if props["default"].get(k) != props[variant].get(k)}
         assert differ == changed, (variant, differ)
