@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from sphfoam import api
+from sphfoam.case.case import Case
 from sphfoam.reference.wall_reflection import head_on_collision
 from sphfoam.sampling.waves import fraction_surface
 
@@ -42,19 +43,17 @@ print("| run | A = 3 m wave at 4 / 5 s, fraction (particle) | A = 2 m wave at 4 
       "| potential flow's peak for the 5-s heights | run's peak, fraction | its error against 5.377 | against the arriving waves' |")
 print("|---|---|---|---|---|---|---|")
 for run in sys.argv[1:]:
-    case = api._case(run)
+    case = Case(run)
     kernel = case.models.sph["kernel"]
     res = json.loads((Path(run) / "result.json").read_text())
     dx = float(res["dx"])
     h = kernel.h(dx)
     c4, c5 = crests(run, 4, kernel, h, dx), crests(run, 5, kernel, h, dx)
     pf = head_on_collision(c5[0][0] / D, c5[1][0] / D).peak * D
+    row = (f"| {Path(run).name} | {c4[0][0]:.3f} / {c5[0][0]:.3f} ({c4[0][1]:.3f} / {c5[0][1]:.3f}) "
+           f"| {c4[1][0]:.3f} / {c5[1][0]:.3f} ({c4[1][1]:.3f} / {c5[1][1]:.3f}) | {pf:.3f} ")
     if "peakFraction" not in res:      # the default reads its crest by the particles only
-        print(f"| {Path(run).name} | {c4[0][0]:.3f} / {c5[0][0]:.3f} ({c4[0][1]:.3f} / {c5[0][1]:.3f}) "
-              f"| {c4[1][0]:.3f} / {c5[1][0]:.3f} ({c4[1][1]:.3f} / {c5[1][1]:.3f}) | {pf:.3f} "
-              "| | | |")
+        print(row + "| | | |")
         continue
     peak = float(res["peakFraction"])
-    print(f"| {Path(run).name} | {c4[0][0]:.3f} / {c5[0][0]:.3f} ({c4[0][1]:.3f} / {c5[0][1]:.3f}) "
-          f"| {c4[1][0]:.3f} / {c5[1][0]:.3f} ({c4[1][1]:.3f} / {c5[1][1]:.3f}) | {pf:.3f} "
-          f"| {peak:.3f} | {100 * (peak / REF - 1):+.2f} % | {100 * (peak / pf - 1):+.2f} % |")
+    print(row + f"| {peak:.3f} | {100 * (peak / REF - 1):+.2f} % | {100 * (peak / pf - 1):+.2f} % |")
