@@ -105,7 +105,8 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     """tutorials/solitaryCollision/studyDict.convergence: every run clones into a valid case
     measured against the potential flow's peak; the kernel-and-filter variants change only
     the kernel and the density filter, the XSPH variant only XSPH, the density-diffusion
-    variants only the filter (and the C-SPH variants add the kernel correction)."""
+    variants only the filter (and the C-SPH variants add the kernel correction, the shifting
+    ones delta+ shifting in XSPH's place)."""
     base = _copy(tmp_path, "solitaryCollision")
     s = st.load(base / "studyDict.convergence")
     st.prepare(s)
@@ -134,6 +135,7 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     assert props["defaultCsph"]["kernelCorrection"]["type"] == "csph"
     assert props["defaultDeltaCsph"]["densityFilter"] == props["defaultDelta"]["densityFilter"]
     assert (kernel["defaultQDelta"], filt["defaultQDelta"]) == ("quartic", "fourtakasDeltaSPH")
+    assert props["bestF"] == props["best"]      # best, read by the fraction too
     for variant, changed in (("defaultDelta", {"densityFilter"}),
                              ("defaultDelta007", {"densityFilter"}),
                              ("defaultDelta005", {"densityFilter"}),
@@ -141,7 +143,11 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
                              ("defaultNoMLSC2", {"densityFilter", "equationOfState"}),
                              ("defaultCsph", {"kernelCorrection"}),
                              ("defaultDeltaCsph", {"densityFilter", "kernelCorrection"}),
-                             ("defaultQDelta", {"densityFilter", "kernel"})):
+                             ("defaultQDelta", {"densityFilter", "kernel"}),
+                             ("defaultDeltaShift", {"densityFilter", "particleShifting",
+                                                    "velocityCorrection"}),
+                             ("bestF", {"densityFilter", "particleShifting",
+                                        "velocityCorrection", "kernel"})):
         differ = {k for k in props["default"].keys() | props[variant].keys()
                   if props["default"].get(k) != props[variant].get(k)}
         assert differ == changed, (variant, differ)
