@@ -113,6 +113,11 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     for run in s.runs:
         m = foamdict.read(Path(run.path) / "system" / "metricsDict")["metrics"]
         assert m["peak"]["reference"] == 5.377
+        # every run reads its peak by the fluid fraction too
+        assert m["peakFraction"] == {"type": "peakElevation", "function": "crestFraction",
+                                     "reference": 5.377}
+        fo = foamdict.read(Path(run.path) / "system" / "controlDict")["functions"]
+        assert fo["crestFraction"]["surface"] == "fraction"
     props = {r.variant: foamdict.read(Path(r.path) / "constant" / "sphProperties")
              for r in s.runs}
     kernel = {v: p["kernel"]["type"] for v, p in props.items()}
@@ -135,7 +140,6 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
     assert props["defaultCsph"]["kernelCorrection"]["type"] == "csph"
     assert props["defaultDeltaCsph"]["densityFilter"] == props["defaultDelta"]["densityFilter"]
     assert (kernel["defaultQDelta"], filt["defaultQDelta"]) == ("quartic", "fourtakasDeltaSPH")
-    assert props["bestF"] == props["best"]      # best, read by the fraction too
     for variant, changed in (("defaultDelta", {"densityFilter"}),
                              ("defaultDelta007", {"densityFilter"}),
                              ("defaultDelta005", {"densityFilter"}),
@@ -145,9 +149,7 @@ def test_collision_convergence_study_clones_into_valid_cases(tmp_path):
                              ("defaultDeltaCsph", {"densityFilter", "kernelCorrection"}),
                              ("defaultQDelta", {"densityFilter", "kernel"}),
                              ("defaultDeltaShift", {"densityFilter", "particleShifting",
-                                                    "velocityCorrection"}),
-                             ("bestF", {"densityFilter", "particleShifting",
-                                        "velocityCorrection", "kernel"})):
+                                                    "velocityCorrection"})):
         differ = {k for k in props["default"].keys() | props[variant].keys()
                   if props["default"].get(k) != props[variant].get(k)}
         assert differ == changed, (variant, differ)
